@@ -1,0 +1,1 @@
+"""Generated protobuf/gRPC stubs (see robonix_api.codegen)."""

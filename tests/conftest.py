@@ -1,0 +1,14 @@
+"""Suite-wide isolation: loopback-only DDS on a domain id of this run's own, short atlas timeouts.
+
+Every process a test starts inherits this environment, so parallel runs on one machine never share
+DDS traffic, and nothing leaves 127.0.0.1.
+"""
+
+import os
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+
+# A domain id per test run (0..232 is Cyclone's valid range with the default port mapping).
+os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 200))
+os.environ.setdefault("CYCLONEDDS_URI", (REPO / "config" / "cyclonedds_loopback.xml").as_uri())
