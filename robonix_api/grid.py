@@ -142,8 +142,11 @@ def _atomic_write(path: Path, payload: bytes) -> None:
 
 
 def save_map_yaml(grid: GridMap, yaml_path: str | os.PathLike[str], *, occupied_thresh: float = 0.65,
-                  free_thresh: float = 0.25) -> Path:
-    """Write ``<name>.pgm`` + ``<name>.yaml`` (trinary, map_server readable), each atomically."""
+                  free_thresh: float = 0.196) -> Path:
+    """Write ``<name>.pgm`` + ``<name>.yaml`` (trinary, map_server readable), each atomically.
+
+    free_thresh defaults to ROS map_saver's 0.196 so that unknown (pixel 205, p=0.196) reads back unknown.
+    """
     yaml_path = Path(yaml_path)
     yaml_path.parent.mkdir(parents=True, exist_ok=True)
     pgm_path = yaml_path.with_suffix(".pgm")
