@@ -1,0 +1,198 @@
+"""The lifecycle Driver: a serialized state machine behind ``robonix.contracts.RobonixLifecycleDriver``.
+
+Kept free of networking and of the atlas client so its exact replies (``ok``/``state``/``error``, the
+robonix Python SDK's values) can be unit-tested; the provider plugs in the handlers and a
+``push_state(state, detail)`` callback that mirrors each transition into the atlas.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
+from robonix_api.result import Deferred, Err, Ok
+
+log = logging.getLogger(__name__)
+
+CMD_INIT = lifecycle_pb2.Driver_Request.CMD_INIT
+CMD_ACTIVATE = lifecycle_pb2.Driver_Request.CMD_ACTIVATE
+CMD_DEACTIVATE = lifecycle_pb2.Driver_Request.CMD_DEACTIVATE
+CMD_SHUTDOWN = lifecycle_pb2.Driver_Request.CMD_SHUTDOWN
+
+# Provider states (lower-case strings are what the Driver reply carries).
+REGISTERED = "registered"
+INACTIVE = "inactive"
+ACTIVE = "active"
+ERROR = "error"
+TERMINATED = "terminated"
+DEFERRED = "deferred"  # reply-only: never a provider state
+
+#: command -> (verb for messages, handler slot, states it may start from, target state)
+_COMMANDS: dict[int, tuple[str, str, frozenset[str], str]] = {
+    CMD_INIT: ("init", "init", frozenset({REGISTERED, INACTIVE, ERROR}), INACTIVE),
+    CMD_ACTIVATE: ("activate", "activate", frozenset({INACTIVE}), ACTIVE),
+    CMD_DEACTIVATE: ("deactivate", "deactivate", frozenset({ACTIVE}), INACTIVE),
+    CMD_SHUTDOWN: ("shutdown", "shutdown", frozenset({REGISTERED, INACTIVE, ACTIVE, ERROR}), TERMINATED),
+}
+_WHY_NOT = {
+    REGISTERED: "not initialized",
+    ERROR: "in error (send CMD_INIT again)",
+    TERMINATED: "already terminated",
+    ACTIVE: "active (deactivate first)",
+    INACTIVE: "not active",
+}
+
+Handler = Callable[..., Any]
+PushState = Callable[[str, str], None]
+
+
+@dataclass(frozen=True)
+class Reply:
+    """A Driver reply before it becomes a ``Driver_Response``."""
+
+    ok: bool
+    state: str
+    error: str = ""
+
+    def to_proto(self) -> lifecycle_pb2.Driver_Response:
+        return lifecycle_pb2.Driver_Response(ok=self.ok, state=self.state, error=self.error)
+
+
+def parse_config_json(text: str) -> dict[str, Any]:
+    """robonix rule: empty -> {}, valid non-object JSON -> {}, invalid JSON -> ValueError naming the spot."""
+    if not text.strip():
+        return {}
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"config_json: invalid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    if not isinstance(value, dict):
+        log.warning("config_json is a JSON %s, not an object; using {}", type(value).__name__)
+        return {}
+    return value
+
+
+def call_handler(name: str, fn: Handler | None, *args: Any) -> Ok | Err | Deferred:
+    """Run one lifecycle handler; a missing one is Ok, an exception or a wrong return type is Err."""
+    if fn is None:
+        return Ok()
+    try:
+        result = fn(*args)
+    except Exception as exc:  # the handler's failure is reported, never crashes the Driver
+        log.exception("on_%s raised", name)
+        return Err(f"on_{name} raised {type(exc).__name__}: {exc}")
+    if isinstance(result, Ok | Err | Deferred):
+        return result
+    return Err(
+        f"TypeError: on_{name} returned {type(result).__name__}; expected Ok(), Err(msg) or Deferred(reason)"
+    )
+
+
+class Lifecycle:
+    """Provider lifecycle state and the Driver command logic; one lock serializes every command.
+
+    Refused commands (illegal transition, bad config_json, unknown command) leave the state alone:
+    the request was wrong, not the provider. A handler's ``Err`` moves the provider to ERROR.
+    """
+
+    def __init__(self, push_state: PushState | None = None) -> None:
+        self.handlers: dict[str, Handler | None] = {"init": None, "activate": None, "deactivate": None,
+                                                     "shutdown": None}
+        self._push = push_state
+        self._lock = threading.Lock()
+        self._state = REGISTERED
+        self._detail = ""
+        self.config: dict[str, Any] = {}
+        self.terminated = threading.Event()
+
+    @property
+    def state(self) -> str:
+        return self._state
+
+    @property
+    def detail(self) -> str:
+        """The last reason pushed with the state (Deferred reason or error message)."""
+        return self._detail
+
+    def set_push(self, push_state: PushState | None) -> None:
+        self._push = push_state
+
+    def handle(self, command: int, config_json: str = "") -> Reply:
+        """Run one Driver command to completion (serialized with every other command)."""
+        with self._lock:
+            return self._handle_locked(int(command), config_json)
+
+    def shutdown(self, why: str = "") -> Reply:
+        """CMD_SHUTDOWN from inside the process (signal, stop()); a no-op once terminated."""
+        with self._lock:
+            if self._state == TERMINATED:
+                return Reply(True, TERMINATED)
+            return self._handle_locked(CMD_SHUTDOWN, "", detail=why, force=True)
+
+    def _handle_locked(self, command: int, config_json: str, detail: str = "", force: bool = False) -> Reply:
+        entry = _COMMANDS.get(command)
+        if entry is None:
+            known = ", ".join(f"{n}={c}" for c, n in ((CMD_INIT, "CMD_INIT"), (CMD_ACTIVATE, "CMD_ACTIVATE"),
+                                                       (CMD_DEACTIVATE, "CMD_DEACTIVATE"),
+                                                       (CMD_SHUTDOWN, "CMD_SHUTDOWN")))
+            return Reply(False, ERROR, f"unknown command {command} (field command; expected {known})")
+        verb, slot, allowed, target = entry
+        if self._state == target and command != CMD_INIT:
+            return Reply(True, target)  # idempotent repeat (activate twice, shutdown twice)
+        if self._state not in allowed:
+            why = _WHY_NOT.get(self._state, "not allowed")
+            return Reply(False, ERROR, f"cannot {verb}: {why} (state {self._state})")
+        args: tuple[Any, ...] = ()
+        if command == CMD_INIT:
+            try:
+                cfg = parse_config_json(config_json)
+            except ValueError as exc:
+                return Reply(False, ERROR, str(exc))
+            args = (cfg,)
+        result = call_handler(slot, self.handlers.get(slot), *args)
+        if isinstance(result, Deferred) and force:  # a signal cannot be postponed
+            result = Err(f"on_{slot} deferred: {result.reason}")
+        if isinstance(result, Deferred):
+            self._detail = result.reason
+            self._notify(self._state, result.reason)
+            return Reply(False, DEFERRED, result.reason)
+        if command == CMD_SHUTDOWN:  # shutdown always ends the provider, even if on_shutdown failed
+            self._move(TERMINATED, detail or (result.msg if isinstance(result, Err) else ""))
+            self.terminated.set()
+            return Reply(True, TERMINATED) if isinstance(result, Ok) else Reply(False, ERROR, result.msg)
+        if isinstance(result, Err):
+            self._move(ERROR, result.msg)
+            return Reply(False, ERROR, result.msg)
+        if command == CMD_INIT:
+            self.config = args[0]
+        self._move(target, "")
+        return Reply(True, target)
+
+    def _move(self, state: str, detail: str) -> None:
+        self._state, self._detail = state, detail
+        self._notify(state, detail)
+
+    def _notify(self, state: str, detail: str) -> None:
+        if self._push is None:
+            return
+        try:
+            self._push(state, detail)
+        except Exception as exc:  # the atlas being away must not fail the Driver reply
+            log.warning("could not push state %s to atlas: %s", state, exc)
+
+
+class DriverServicer(robonix_contracts_pb2_grpc.RobonixLifecycleDriverServicer):
+    """gRPC face of :class:`Lifecycle` (``/robonix.contracts.RobonixLifecycleDriver/Driver``)."""
+
+    def __init__(self, lifecycle: Lifecycle) -> None:
+        self._lifecycle = lifecycle
+
+    def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:  # noqa: N802
+        reply = self._lifecycle.handle(request.command, request.config_json)
+        log.info("Driver(command=%d) -> ok=%s state=%s %s", request.command, reply.ok, reply.state, reply.error)
+        return reply.to_proto()

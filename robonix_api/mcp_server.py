@@ -1,0 +1,144 @@
+"""MCP tools for ``@svc.mcp(contract)`` handlers, served over streamable HTTP at ``/mcp/``.
+
+Uses the official ``mcp`` package's low-level server so the input schema can come straight from the
+contract's request proto (one source of truth with gRPC); uvicorn runs it in a background thread so
+the provider's main thread stays free for signals.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import socket
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import anyio.to_thread
+import mcp_types as types
+import uvicorn
+from google.protobuf import json_format
+from google.protobuf.message import Message
+from mcp.server import Server
+from mcp.shared.exceptions import MCPError
+
+from robonix_api.contracts import ContractSpec
+from robonix_api.grpc_contracts import StatusError, invoke
+from robonix_api.proto_schema import message_class, message_schema
+
+log = logging.getLogger(__name__)
+
+MCP_PATH = "/mcp/"
+
+
+@dataclass
+class McpTool:
+    """One contract exposed as an MCP tool."""
+
+    spec: ContractSpec
+    handler: Callable[..., Any]
+    description: str
+    request_cls: type[Message]
+    input_schema: dict[str, Any]
+
+    @property
+    def name(self) -> str:
+        return self.spec.tool_name
+
+    @classmethod
+    def build(cls, spec: ContractSpec, handler: Callable[..., Any], description: str = "") -> McpTool:
+        req_name, _ = spec.proto_types()
+        req_cls = message_class(req_name)
+        doc = (description or (handler.__doc__ or "")).strip() or spec.description or spec.id
+        return cls(spec, handler, doc, req_cls, message_schema(req_cls.DESCRIPTOR))
+
+    def call(self, arguments: dict[str, Any]) -> types.CallToolResult:
+        """Parse the arguments into the request proto, run the handler, return structured output."""
+        try:
+            request = json_format.ParseDict(arguments, self.request_cls())
+        except json_format.ParseError as exc:
+            return _tool_error(f"invalid arguments for tool {self.name}: {exc}")
+        try:
+            response = invoke(self.handler, request, None)
+        except StatusError as exc:
+            return _tool_error(f"{self.name}: {exc}")
+        except Exception as exc:  # report to the caller, keep serving
+            log.exception("MCP tool %s raised", self.name)
+            return _tool_error(f"{self.name}: {type(exc).__name__}: {exc}")
+        if isinstance(response, Message):
+            data = json_format.MessageToDict(response, preserving_proto_field_name=True,
+                                             always_print_fields_with_no_presence=True)
+        elif isinstance(response, dict):
+            data = response
+        else:
+            return _tool_error(f"{self.name}: handler returned {type(response).__name__}, expected a proto message")
+        return types.CallToolResult(content=[types.TextContent(type="text", text=json.dumps(data))],
+                                    structured_content=data)
+
+
+def _tool_error(text: str) -> types.CallToolResult:
+    return types.CallToolResult(content=[types.TextContent(type="text", text=text)], is_error=True)
+
+
+class McpToolServer:
+    """A streamable-HTTP MCP server for a set of tools, on its own thread; ``start()`` gives the port."""
+
+    def __init__(self, name: str, tools: list[McpTool], host: str = "127.0.0.1") -> None:
+        self._tools = {t.name: t for t in tools}
+        self._host = host
+        self._server: uvicorn.Server | None = None
+        self._thread: threading.Thread | None = None
+        self._sock: socket.socket | None = None
+        self.port = 0
+        self._mcp = Server(name, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
+                           get_tool_input_schema=self._schema_of)
+
+    async def _list_tools(self, ctx: Any, params: Any) -> types.ListToolsResult:
+        return types.ListToolsResult(tools=[
+            types.Tool(name=t.name, description=t.description, input_schema=t.input_schema)
+            for t in self._tools.values()
+        ])
+
+    def _schema_of(self, name: str) -> dict[str, Any] | None:
+        tool = self._tools.get(name)
+        return tool.input_schema if tool else None
+
+    async def _call_tool(self, ctx: Any, params: types.CallToolRequestParams) -> types.CallToolResult:
+        tool = self._tools.get(params.name)
+        if tool is None:
+            raise MCPError(code=types.INVALID_PARAMS, message=f"unknown tool {params.name!r}; "
+                           f"known: {sorted(self._tools)}")
+        # Handlers are plain blocking functions; keep the event loop free.
+        return await anyio.to_thread.run_sync(tool.call, dict(params.arguments or {}))
+
+    def start(self, timeout_s: float = 30.0) -> int:
+        """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
+        app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host)
+        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((self._host, 0))
+        self.port = sock.getsockname()[1]
+        config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
+        self._server = uvicorn.Server(config)
+        self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [sock]},
+                                        name="mcp-server", daemon=True)
+        self._thread.start()
+        deadline = time.monotonic() + timeout_s
+        while not self._server.started:
+            if not self._thread.is_alive() or time.monotonic() > deadline:
+                raise RuntimeError(f"MCP server on {self._host}:{self.port} did not start")
+            time.sleep(0.02)
+        self._sock = sock
+        return self.port
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        if self._server is not None:
+            self._server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        self._server = self._thread = None
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None

@@ -1,0 +1,120 @@
+"""Fixtures for the SDK tests: a recording fake atlas (unit tests) and the real atlas server."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import grpc
+import pytest
+
+from robonix_api.types import LifecycleState, Transport
+
+
+class FakeRpcError(grpc.RpcError):
+    def __init__(self, code: grpc.StatusCode, details: str = "") -> None:
+        super().__init__(details)
+        self._code, self._details = code, details
+
+    def code(self) -> grpc.StatusCode:
+        return self._code
+
+    def details(self) -> str:
+        return self._details
+
+
+class FakeAtlas:
+    """Records what a provider tells the atlas; ``forget()`` simulates an atlas restart."""
+
+    address = "127.0.0.1:1"
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.registrations: list[dict[str, Any]] = []
+        self.declared: dict[tuple[str, str, Transport], dict[str, Any]] = {}
+        self.states: list[tuple[str, LifecycleState, str]] = []
+        self.heartbeats = 0
+        self.known: set[str] = set()
+        self.closed = False
+
+    def register(self, kind: Any, id: str, namespace: str, capability_md_path: str = "",  # noqa: A002
+                 capability_md: str = "") -> str:
+        with self.lock:
+            self.registrations.append(dict(kind=kind, id=id, namespace=namespace,
+                                           capability_md_path=capability_md_path, capability_md=capability_md))
+            self.known.add(id)
+            for key in [k for k in self.declared if k[0] == id]:
+                del self.declared[key]
+            return id
+
+    def declare_capability(self, provider_id: str, contract_id: str, endpoint: str, transport: Any,
+                           params: Any = None, description: str = "") -> str:
+        with self.lock:
+            key = (provider_id, contract_id, Transport.parse(transport))
+            if key in self.declared:
+                raise FakeRpcError(grpc.StatusCode.ALREADY_EXISTS, f"duplicate {key}")
+            self.declared[key] = dict(endpoint=endpoint, params=params, description=description)
+            return endpoint
+
+    def set_state(self, id: str, state: LifecycleState, detail: str = "") -> LifecycleState:  # noqa: A002
+        with self.lock:
+            self.states.append((id, state, detail))
+        return LifecycleState.REGISTERED
+
+    def heartbeat(self, id: str) -> None:  # noqa: A002
+        with self.lock:
+            self.heartbeats += 1
+            if id not in self.known:
+                raise FakeRpcError(grpc.StatusCode.NOT_FOUND, f"id {id!r} not registered")
+
+    def forget(self) -> None:
+        with self.lock:
+            self.known.clear()
+            self.declared.clear()
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def wait_until(pred: Callable[[], Any], timeout_s: float = 30.0, what: str = "condition") -> Any:
+    """Poll ``pred`` until truthy; generous deadlines because the test machine is shared."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        value = pred()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(0.05)
+
+
+@pytest.fixture
+def fake_atlas() -> FakeAtlas:
+    return FakeAtlas()
+
+
+@pytest.fixture
+def short_heartbeat(monkeypatch: pytest.MonkeyPatch) -> float:
+    monkeypatch.setenv("ROBONIX_HEARTBEAT_PERIOD_S", "0.3")
+    return 0.3
+
+
+@pytest.fixture
+def clean_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    for name in ("RBNX_INSTANCE_NAME", "RBNX_DEPLOY_MANAGED", "ROBONIX_ADVERTISE_HOST",
+                 "ROBONIX_PROVIDER_BIND_HOST"):
+        monkeypatch.delenv(name, raising=False)
+
+
+@pytest.fixture
+def atlas_server(clean_env: None) -> Iterator[Any]:
+    """A real in-process atlas on a free loopback port (skipped until atlas/server.py exists)."""
+    server_mod = pytest.importorskip("atlas.server")
+    server = server_mod.AtlasServer(listen="127.0.0.1:0", heartbeat_timeout_ms=60000, eviction_interval_ms=1000)
+    server.start()
+    try:
+        yield server
+    finally:
+        server.stop()
