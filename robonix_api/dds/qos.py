@@ -1,0 +1,70 @@
+"""QoS presets under robonix's names, mapped to the ROS 2 profiles they stand for.
+
+Every preset also pins the data representation to XCDR1, which is what rmw_cyclonedds offers and
+accepts for ROS 2's ``@final`` types; a reader asking for XCDR2 would never match a ROS 2 writer.
+"""
+
+from __future__ import annotations
+
+from cyclonedds.core import Policy
+from cyclonedds.qos import Qos
+from cyclonedds.util import duration
+
+# Cyclone's own default for reliable writers: how long write() may block on a full history.
+MAX_BLOCKING = duration(milliseconds=100)
+
+# name -> (reliable, transient_local, default depth)
+_PRESETS: dict[str, tuple[bool, bool, int]] = {
+    "best_effort": (False, False, 10),
+    "reliable": (True, False, 10),
+    "latched": (True, True, 1),
+    "transient_local": (True, True, 1),  # alias of latched (robonix maps it differently; this is ROS's meaning)
+    "sensor_data": (False, False, 5),  # rmw_qos_profile_sensor_data
+    "clock": (False, False, 1),  # rclcpp::ClockQoS = sensor_data with keep-last 1
+}
+QOS_NAMES: tuple[str, ...] = tuple(_PRESETS)
+
+XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+
+
+def qos_profile(name: str, depth: int | None = None) -> Qos:
+    """A preset by name; ``depth`` overrides the KEEP_LAST depth."""
+    try:
+        reliable, latched, default_depth = _PRESETS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown QoS preset {name!r}; valid: {', '.join(QOS_NAMES)}") from None
+    d = default_depth if depth is None else int(depth)
+    if d < 1:
+        raise ValueError(f"QoS depth must be >= 1, got {depth}")
+    return Qos(
+        Policy.Reliability.Reliable(MAX_BLOCKING) if reliable else Policy.Reliability.BestEffort,
+        Policy.Durability.TransientLocal if latched else Policy.Durability.Volatile,
+        Policy.History.KeepLast(d),
+        XCDR1,
+    )
+
+
+def resolve_qos(qos: str | Qos, depth: int | None = None) -> Qos:
+    """Accept a preset name or a ready Qos; a custom Qos gets XCDR1 and the depth added if missing."""
+    if isinstance(qos, str):
+        return qos_profile(qos, depth)
+    if not isinstance(qos, Qos):
+        raise TypeError(f"qos must be a preset name ({', '.join(QOS_NAMES)}) or a cyclonedds Qos, got {qos!r}")
+    extra = []
+    if qos[Policy.DataRepresentation] is None:
+        extra.append(XCDR1)
+    if depth is not None:
+        extra.append(Policy.History.KeepLast(int(depth)))
+    return Qos(*extra, base=qos) if extra else qos
+
+
+def describe(qos: Qos) -> dict[str, object]:
+    """Plain summary (reliability, durability, depth) for logs and the atlas."""
+    rel = qos[Policy.Reliability.BestEffort]
+    dur = qos[Policy.Durability.Volatile]
+    hist = qos[Policy.History.KeepAll]
+    return {
+        "reliability": "reliable" if isinstance(rel, Policy.Reliability.Reliable) else "best_effort",
+        "durability": "transient_local" if dur is Policy.Durability.TransientLocal else "volatile",
+        "depth": getattr(hist, "depth", None),
+    }

@@ -1,0 +1,76 @@
+"""Loopback-only config in effect; malformed CYCLONEDDS_URI fails fast and clearly."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from robonix_api.dds import DdsNode, effective_config
+from robonix_api.dds.config import DEFAULT_CONFIG, DdsConfigError, probe_runtime, resolve_domain_id
+
+CHILD = "from robonix_api.dds import DdsNode\nDdsNode().close()\nprint('OK')\n"
+
+
+def run_child(uri: str | None, timeout: float = 60.0) -> tuple[subprocess.CompletedProcess, float]:
+    env = dict(os.environ)
+    if uri is None:
+        env.pop("CYCLONEDDS_URI", None)
+    else:
+        env["CYCLONEDDS_URI"] = uri
+    t = time.monotonic()
+    res = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True, text=True, timeout=timeout)
+    return res, time.monotonic() - t
+
+
+def test_effective_config_is_loopback_without_multicast() -> None:
+    cfg = effective_config()
+    assert cfg["interfaces"] == ["lo"]
+    assert cfg["multicast_disabled"] and cfg["allow_multicast"] == "false"
+    assert cfg["peers"] == ["127.0.0.1"] and cfg["loopback_only"]
+
+
+def test_running_cyclone_selected_only_lo() -> None:
+    """Cyclone's own trace of the config in use: only lo selected, no multicast on it."""
+    rt = probe_runtime()
+    assert rt["selected_interfaces"] == ["lo"], rt
+    assert rt["multicast_interfaces"] == [] and rt["allow_multicast"] == "false", rt
+
+
+def test_node_reports_config(node: DdsNode) -> None:
+    assert node.config["loopback_only"] and node.domain_id == int(os.environ["ROS_DOMAIN_ID"])
+
+
+def test_default_config_when_uri_unset(tmp_path: Path) -> None:
+    res, _ = run_child(None)
+    assert res.returncode == 0 and "OK" in res.stdout, res.stderr
+    assert DEFAULT_CONFIG.is_file()
+
+
+@pytest.mark.parametrize("content,expect", [
+    (None, "does not exist"),
+    ("<CycloneDDS><Domain><General>", "not well-formed XML"),
+    ("<Cyclone/>", "root element"),
+    ("<CycloneDDS><Domain><General><NoSuchSetting>1</NoSuchSetting></General></Domain></CycloneDDS>",
+     "rejected config"),
+])
+def test_bad_uri_fails_fast_with_clear_error(tmp_path: Path, content: str | None, expect: str) -> None:
+    path = tmp_path / "cdds.xml"
+    if content is not None:
+        path.write_text(content)
+    res, took = run_child(path.as_uri())
+    assert res.returncode != 0
+    assert "DdsConfigError" in res.stderr and expect in res.stderr, res.stderr[-1500:]
+    assert took < 30.0  # a clear failure, never a hang (generous for a loaded 2-core box)
+
+
+def test_bad_domain_id(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ROS_DOMAIN_ID", "abc")
+    with pytest.raises(DdsConfigError, match="ROS_DOMAIN_ID"):
+        resolve_domain_id()
+    with pytest.raises(DdsConfigError, match="out of range"):
+        resolve_domain_id(300)

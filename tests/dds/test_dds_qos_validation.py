@@ -1,0 +1,80 @@
+"""QoS presets and publish-time validation of wrongly-shaped messages."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from cyclonedds.core import Policy
+
+from robonix_api.dds import (
+    QOS_NAMES,
+    DdsNode,
+    LaserScan,
+    OccupancyGrid,
+    Odometry,
+    TFMessage,
+    Twist,
+    qos_profile,
+)
+from robonix_api.dds.messages import Header, PoseWithCovariance, Time
+from robonix_api.dds.qos import describe
+
+
+@pytest.mark.parametrize("name,rel,dur,depth", [
+    ("best_effort", "best_effort", "volatile", 10),
+    ("reliable", "reliable", "volatile", 10),
+    ("latched", "reliable", "transient_local", 1),
+    ("transient_local", "reliable", "transient_local", 1),
+    ("sensor_data", "best_effort", "volatile", 5),
+    ("clock", "best_effort", "volatile", 1),
+])
+def test_presets(name: str, rel: str, dur: str, depth: int) -> None:
+    q = qos_profile(name)
+    assert describe(q) == {"reliability": rel, "durability": dur, "depth": depth}
+    assert q[Policy.DataRepresentation] == Policy.DataRepresentation(use_cdrv0_representation=True)
+    assert describe(qos_profile(name, depth=42))["depth"] == 42
+
+
+def test_transient_local_is_latched() -> None:
+    assert qos_profile("transient_local") == qos_profile("latched")
+
+
+def test_unknown_preset_lists_valid_names() -> None:
+    with pytest.raises(ValueError) as e:
+        qos_profile("durable")
+    for n in QOS_NAMES:
+        assert n in str(e.value)
+
+
+@pytest.mark.parametrize("msg,exc,field", [
+    (Odometry(pose=PoseWithCovariance(covariance=np.zeros(35))), ValueError, "Odometry.pose.covariance"),
+    (LaserScan(angle_min="0.5"), TypeError, "LaserScan.angle_min"),
+    (LaserScan(ranges=np.array(["1", "2"])), TypeError, "LaserScan.ranges"),
+    (LaserScan(ranges=np.array([1 + 2j])), TypeError, "LaserScan.ranges"),
+    (LaserScan(ranges=np.zeros((2, 3), np.float32)), ValueError, "LaserScan.ranges"),
+    (LaserScan(ranges=[1.0, None]), TypeError, "LaserScan.ranges"),
+    (OccupancyGrid(data=np.zeros(4, np.float32)), TypeError, "OccupancyGrid.data"),
+    (OccupancyGrid(data=np.array([0, 300], np.int16)), ValueError, "OccupancyGrid.data"),
+    (LaserScan(header=Header(stamp=Time(sec=-1, nanosec=-5))), ValueError, "LaserScan.header.stamp.nanosec"),
+    (LaserScan(header=Header(frame_id=5)), TypeError, "LaserScan.header.frame_id"),
+    (TFMessage(transforms=[Twist()]), TypeError, "TFMessage.transforms[0]"),
+])
+def test_bad_messages_rejected_at_publish(node: DdsNode, msg: object, exc: type, field: str) -> None:
+    pub = node.create_publisher("/bad_" + type(msg).__name__.lower(), type(msg), "best_effort")
+    with pytest.raises(exc) as e:
+        pub.publish(msg)
+    assert field in str(e.value)
+
+
+def test_wrong_message_type(node: DdsNode) -> None:
+    pub = node.create_publisher("/cmd_vel_t", Twist)
+    with pytest.raises(TypeError, match="Twist"):
+        pub.publish(LaserScan())
+
+
+def test_numeric_inputs_are_accepted(node: DdsNode) -> None:
+    pub = node.create_publisher("/ok_scan", LaserScan, "best_effort")
+    pub.publish(LaserScan(ranges=[1, 2, 3]))  # ints into float32
+    pub.publish(LaserScan(ranges=np.ones(360)))  # float64 array into float32
+    gpub = node.create_publisher("/ok_map", OccupancyGrid, "latched")
+    gpub.publish(OccupancyGrid(data=[0, 100, -1]))
