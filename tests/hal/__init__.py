@@ -1,0 +1,1 @@
+"""Tests of the hal_panda_mobile simulation core."""
