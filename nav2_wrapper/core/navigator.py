@@ -1,0 +1,301 @@
+"""The navigator state machine: one goal at a time, PENDING → RUNNING → SUCCEEDED / FAILED / CANCELED.
+
+It owns no thread and reads no clock: the provider calls ``tick(now, pose, vel, grid, scan)`` at the
+controller rate with sim (or wall) time, which is what makes the core deterministic and testable.
+The behaviour follows Nav2's navigate_to_pose tree: replan at a fixed rate (and at once when the path
+is blocked), follow with the controller, check goal and progress, and on failure run the recoveries
+round-robin until the retry budget is spent.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robonix_api.grid import GridMap
+
+from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
+from .controller import ControllerConfig, HolonomicController
+from .costmap import Costmap, CostmapConfig, LaserScan
+from .costs import INSCRIBED, LETHAL
+from .planner import GlobalPlanner, PlannerConfig, PlanResult
+from .recoveries import RecoveryConfig, RecoverySequence
+
+PENDING, RUNNING, SUCCEEDED, FAILED, CANCELED, IDLE = "PENDING", "RUNNING", "SUCCEEDED", "FAILED", "CANCELED", "IDLE"
+TERMINAL = (SUCCEEDED, FAILED, CANCELED)
+Pose = tuple[float, float, float]
+
+
+@dataclass
+class NavigatorConfig:
+    replan_frequency: float = 1.0          # Hz (Nav2 BT RateController)
+    controller_frequency: float = 20.0     # Hz; only used as the first step's dt
+    path_blocked_lookahead: float = 2.5    # m of path checked for new lethal/inscribed cells each tick
+    min_replan_interval: float = 0.25      # s between event-triggered replans
+    blocked_timeout: float = 2.0           # s the controller may find no safe command before recovering
+    pending_timeout: float = 30.0          # s a goal may wait for the first map + pose
+    global_frame: str = "map"
+    robot_base_frame: str = "base_link"
+
+
+def _local_default() -> CostmapConfig:
+    return CostmapConfig(name="local_costmap", rolling_window=True, width=3.0, height=3.0, static_layer=False)
+
+
+@dataclass
+class NavConfig:
+    """Everything the navigator needs; ``nav2_wrapper.params`` builds it from a Nav2 params profile."""
+
+    global_costmap: CostmapConfig = field(default_factory=CostmapConfig)
+    local_costmap: CostmapConfig = field(default_factory=_local_default)
+    planner: PlannerConfig = field(default_factory=PlannerConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    goal_checker: GoalCheckerConfig = field(default_factory=GoalCheckerConfig)
+    progress_checker: ProgressCheckerConfig = field(default_factory=ProgressCheckerConfig)
+    recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
+    navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+
+
+@dataclass
+class Command:
+    vx: float
+    vy: float
+    wz: float
+    state: str
+    detail: str
+    run_id: str = ""
+
+
+@dataclass
+class GoalRecord:
+    run_id: str
+    goal: Pose
+    state: str = PENDING
+    detail: str = "waiting to start"
+    accepted: bool = True
+    recoveries: int = 0
+    started: float = 0.0
+    finished: float | None = None
+
+
+def validate_goal(x: float, y: float, yaw: float, costmap: Costmap) -> str | None:
+    """None if the goal may be planned to; else the specific reason it may not."""
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        return f"goal has non-finite coordinates ({x}, {y}, {yaw})"
+    c, r = costmap.world_to_cell(x, y)
+    if not bool(costmap.in_bounds(c, r)):
+        rows, cols = costmap.shape
+        return (f"goal ({x:.2f}, {y:.2f}) is off the map (x {costmap.origin_x:.2f}..{costmap.origin_x + cols * costmap.resolution:.2f}, "
+                f"y {costmap.origin_y:.2f}..{costmap.origin_y + rows * costmap.resolution:.2f})")
+    if int(costmap.costs[int(r), int(c)]) == LETHAL:
+        return f"goal ({x:.2f}, {y:.2f}) is inside an obstacle"
+    return None
+
+
+class Navigator:
+    def __init__(self, cfg: NavConfig | None = None) -> None:
+        self.cfg = cfg or NavConfig()
+        self.global_costmap = Costmap(self.cfg.global_costmap)
+        self.local_costmap = Costmap(self.cfg.local_costmap)
+        self.planner = GlobalPlanner(self.cfg.planner)
+        self.controller = HolonomicController(self.cfg.controller)
+        self.goal_checker = GoalChecker(self.cfg.goal_checker)
+        self.progress = ProgressChecker(self.cfg.progress_checker)
+        self.recovery = RecoverySequence(self.cfg.recovery, self.clear_costmaps)
+        self.records: dict[str, GoalRecord] = {}
+        self.active: GoalRecord | None = None
+        self.latest: GoalRecord | None = None
+        self.path = np.zeros((0, 2))
+        self.has_map = False
+        self._ids = itertools.count(1)
+        self._last_tick: float | None = None
+        self._reset_run()
+
+    # ---- goal API ---------------------------------------------------------------------------------
+    def navigate(self, x: float, y: float, yaw: float, now: float, run_id: str | None = None) -> GoalRecord:
+        """Accept a goal (preempting the running one) or reject it with a reason (accepted=False, FAILED)."""
+        rid = run_id or f"nav-{next(self._ids)}"
+        rec = GoalRecord(rid, (float(x), float(y), float(yaw)), started=now)
+        self.records[rid] = rec
+        self.latest = rec
+        reason = validate_goal(x, y, yaw, self.global_costmap) if self.has_map else (
+            None if all(math.isfinite(v) for v in (x, y, yaw)) else f"goal has non-finite coordinates ({x}, {y}, {yaw})")
+        if reason:
+            rec.accepted = False
+            self._finish(rec, FAILED, f"rejected: {reason}", now)
+            return rec
+        if self.active is not None and self.active.state not in TERMINAL:
+            self._finish(self.active, CANCELED, f"preempted by {rid}", now)
+        self.active = rec
+        self._reset_run()
+        return rec
+
+    def cancel(self, now: float, run_id: str | None = None) -> GoalRecord | None:
+        """Cancel the given (or the running) goal; the next tick commands zero velocity."""
+        rec = self.records.get(run_id) if run_id else self.active
+        if rec is None:
+            return None
+        if rec.state not in TERMINAL:
+            self._finish(rec, CANCELED, "canceled", now)
+        return rec
+
+    def status(self, run_id: str | None = None) -> GoalRecord | None:
+        return self.records.get(run_id) if run_id else self.latest
+
+    def set_speed_limit(self, limit: float, percentage: bool = True) -> None:
+        self.controller.set_speed_limit(limit, percentage)
+
+    def clear_costmaps(self) -> None:
+        self.global_costmap.clear()
+        self.local_costmap.clear()
+
+    # ---- the tick ---------------------------------------------------------------------------------
+    def tick(self, now: float, pose: Pose, vel: Pose = (0.0, 0.0, 0.0), grid: GridMap | None = None,
+             scan: LaserScan | None = None, sensor_pose: Pose | None = None) -> Command:
+        """Fold in new data, advance the active goal, and return the velocity command (body frame)."""
+        dt = (now - self._last_tick) if self._last_tick is not None else 1.0 / self.cfg.navigator.controller_frequency
+        self._last_tick = now
+        pose = (float(pose[0]), float(pose[1]), float(pose[2]))
+        self._update_costmaps(pose, grid, scan, sensor_pose)
+        rec = self.active
+        if rec is None or rec.state in TERMINAL:
+            shown = rec or self.latest
+            return Command(0.0, 0.0, 0.0, shown.state if shown else IDLE, shown.detail if shown else "idle",
+                           shown.run_id if shown else "")
+        if rec.state == PENDING and not self._start(rec, now, pose):
+            return self._zero(rec)
+        return self._run(rec, now, pose, vel, dt)
+
+    def _update_costmaps(self, pose: Pose, grid: GridMap | None, scan: LaserScan | None,
+                         sensor_pose: Pose | None) -> None:
+        if grid is not None:
+            self.global_costmap.set_static_map(grid)
+            self.local_costmap.set_static_map(grid)
+            self.has_map = True
+        self.local_costmap.update_origin(pose[0], pose[1])
+        if scan is not None:
+            sp = sensor_pose if sensor_pose is not None else pose
+            self.global_costmap.update_scan(scan, sp)
+            self.local_costmap.update_scan(scan, sp)
+
+    def _start(self, rec: GoalRecord, now: float, pose: Pose) -> bool:
+        if not self.has_map:
+            if now - rec.started > self.cfg.navigator.pending_timeout:
+                self._finish(rec, FAILED, "no map received within "
+                             f"{self.cfg.navigator.pending_timeout:.0f} s", now)
+            else:
+                rec.detail = "waiting for the first map"
+            return False
+        reason = validate_goal(*rec.goal, self.global_costmap)
+        if reason:
+            self._finish(rec, FAILED, reason, now)
+            return False
+        res = self._plan(pose, now)
+        if not res.ok:                      # Nav2: ComputePathToPose retried once after clearing the global costmap
+            self.global_costmap.clear()
+            res = self._plan(pose, now)
+        if not res.ok:
+            self._finish(rec, FAILED, res.reason, now)
+            return False
+        rec.state = RUNNING
+        rec.detail = f"running: {res.length:.2f} m path"
+        return True
+
+    def _run(self, rec: GoalRecord, now: float, pose: Pose, vel: Pose, dt: float) -> Command:
+        nc = self.cfg.navigator
+        if self.recovery.active is not None:
+            step = self.recovery.step(now, pose, self.local_costmap, self.controller)
+            if not step.done:
+                rec.detail = f"recovering: {self.recovery.active.name} ({rec.recoveries} recoveries)"
+                return Command(step.vx, step.vy, step.wz, rec.state, rec.detail, rec.run_id)
+            self._force_replan = True
+            self.progress.reset()
+        if self.goal_checker.is_goal_reached(pose, rec.goal):
+            err = math.hypot(pose[0] - rec.goal[0], pose[1] - rec.goal[1])
+            self._finish(rec, SUCCEEDED, f"reached goal ({err:.2f} m from it, {rec.recoveries} recoveries)", now)
+            return self._zero(rec)
+        due = now - self._last_plan >= 1.0 / nc.replan_frequency
+        urgent = (self._force_replan or self._path_blocked(pose)) and now - self._last_plan >= nc.min_replan_interval
+        if due or urgent:
+            res = self._plan(pose, now)
+            if not res.ok:
+                return self._recover(rec, now, pose, res.reason)
+        if not self.progress.check(now, pose):
+            self.progress.reset()
+            return self._recover(rec, now, pose, "no progress "
+                                 f"({self.cfg.progress_checker.required_movement_radius:.2f} m in "
+                                 f"{self.cfg.progress_checker.movement_time_allowance:.0f} s)")
+        out = self.controller.compute(pose, vel, rec.goal, self.local_costmap, dt,
+                                      self.goal_checker.xy_reached(pose, rec.goal))
+        if out.blocked:
+            self._force_replan = True
+            if self._blocked_since is None:
+                self._blocked_since = now
+            elif now - self._blocked_since > nc.blocked_timeout:
+                self._blocked_since = None
+                return self._recover(rec, now, pose, "controller found no collision-free command")
+        else:
+            self._blocked_since = None
+        speed = max(self.cfg.controller.desired_linear_vel * self.controller.speed_limit, 1e-3)
+        rec.detail = (f"{out.remaining:.2f} m remaining, ETA {out.remaining / speed:.0f} s, "
+                      f"{rec.recoveries} recoveries" + (", blocked" if out.blocked else ""))
+        return Command(out.vx, out.vy, out.wz, rec.state, rec.detail, rec.run_id)
+
+    # ---- helpers ----------------------------------------------------------------------------------
+    def _plan(self, pose: Pose, now: float) -> PlanResult:
+        goal = self.active.goal if self.active else pose
+        res = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
+        self._last_plan = now
+        self._force_replan = False
+        if res.ok:
+            self.path = res.path
+            self.controller.set_path(res.path)
+        return res
+
+    def _path_blocked(self, pose: Pose) -> bool:
+        """New lethal/inscribed cells on the next stretch of the path (outside the start-escape zone)."""
+        p = self.controller.path
+        if len(p) == 0:
+            return False
+        i = max(self.controller._idx, 0)
+        j = int(np.searchsorted(self.controller._cum, self.controller._cum[i] + self.cfg.navigator.path_blocked_lookahead))
+        seg = p[i:j + 1]
+        far = np.hypot(seg[:, 0] - pose[0], seg[:, 1] - pose[1]) > self.cfg.planner.escape_radius
+        seg = seg[far]
+        if len(seg) == 0:
+            return False
+        c = self.global_costmap.cost_at(seg[:, 0], seg[:, 1], outside=0)
+        cl = self.local_costmap.cost_at(seg[:, 0], seg[:, 1], outside=0)
+        return bool(np.any(((c >= INSCRIBED) & (c <= LETHAL)) | ((cl >= INSCRIBED) & (cl <= LETHAL))))
+
+    def _recover(self, rec: GoalRecord, now: float, pose: Pose, why: str) -> Command:
+        beh = self.recovery.begin(now, pose)
+        if beh is None:
+            self._finish(rec, FAILED, f"{why}; gave up after {rec.recoveries} recoveries", now)
+            return self._zero(rec)
+        rec.recoveries += 1
+        rec.detail = f"recovering: {beh.name} after: {why} ({rec.recoveries} recoveries)"
+        self.controller.set_path(self.controller.path)
+        return Command(0.0, 0.0, 0.0, rec.state, rec.detail, rec.run_id)
+
+    def _reset_run(self) -> None:
+        self.recovery.reset()
+        self.goal_checker.reset()
+        self.progress.reset()
+        self.controller.set_path(np.zeros((0, 2)))
+        self.path = np.zeros((0, 2))
+        self._last_plan = -math.inf
+        self._force_replan = False
+        self._blocked_since: float | None = None
+
+    def _finish(self, rec: GoalRecord, state: str, detail: str, now: float) -> None:
+        rec.state, rec.detail, rec.finished = state, detail, now
+        if rec is self.active:
+            self.controller.set_path(np.zeros((0, 2)))
+
+    @staticmethod
+    def _zero(rec: GoalRecord) -> Command:
+        return Command(0.0, 0.0, 0.0, rec.state, rec.detail, rec.run_id)

@@ -1,0 +1,148 @@
+"""Global planner: cost-aware 8-connected A* on the costmap, goal tolerance, Theta*-style shortcutting.
+
+Traversal cost of a cell is ``1 + cost_travel_multiplier * cost / 252`` per unit length (Smac-2D-like);
+inscribed and lethal cells are blocked, unknown cells cost like ``unknown_cost`` when ``allow_unknown``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import _search
+from .costmap import Costmap
+from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
+
+
+@dataclass
+class PlannerConfig:
+    tolerance: float = 0.5              # m: accept the nearest reachable cell this close to a blocked goal
+    allow_unknown: bool = True
+    cost_travel_multiplier: float = 2.0
+    unknown_cost: int = 200             # cost an unknown cell is charged at (0..252)
+    smooth_path: bool = True
+    smoothing_slack: float = 0.02       # a shortcut may cost this fraction more than the sub-path it replaces
+    escape_radius: float = 0.35         # m: how far a start inside the inscribed band may move through it
+    heuristic_weight: float = 1.25      # weighted A*: cost ≤ 1.25 × optimal (measured median 1.03–1.06); ~5x fewer expansions
+
+
+@dataclass
+class PlanResult:
+    ok: bool
+    path: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))  # (N, 2) world points
+    reason: str = ""
+    cost: float = 0.0                   # A* cost (cells × traversal factor)
+    length: float = 0.0                 # m, of the returned path
+    expansions: int = 0
+
+
+class GlobalPlanner:
+    """Plans on a Costmap's master costs. Holds search buffers so repeated plans allocate nothing big."""
+
+    def __init__(self, cfg: PlannerConfig | None = None) -> None:
+        self.cfg = cfg or PlannerConfig()
+        self._size = 0
+        self._stamp = 0
+
+    def traversal_table(self) -> NDArray[np.float64]:
+        c = self.cfg
+        t = 1.0 + c.cost_travel_multiplier * np.arange(256, dtype=np.float64) / MAX_NON_OBSTACLE
+        t[INSCRIBED] = t[LETHAL] = np.inf
+        t[NO_INFORMATION] = (1.0 + c.cost_travel_multiplier * min(c.unknown_cost, MAX_NON_OBSTACLE) / MAX_NON_OBSTACLE
+                             if c.allow_unknown else np.inf)
+        return t
+
+    def _buffers(self, n: int) -> None:
+        if n != self._size:
+            self._g = np.empty(n, np.float32)
+            self._parent = np.empty(n, np.int32)
+            self._state = np.zeros(n, np.int32)
+            self._size, self._stamp = n, 0
+        self._stamp += 1
+        if self._stamp >= 2**30 - 2:
+            self._state[:] = 0
+            self._stamp = 1
+
+    def plan(self, costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]) -> PlanResult:
+        """Path from start to goal (world x, y in the costmap frame), or ok=False with the reason."""
+        costs = costmap.costs
+        rows, cols = costs.shape
+        res = costmap.resolution
+        sc, sr = (int(v) for v in costmap.world_to_cell(start[0], start[1]))
+        gc, gr = (int(v) for v in costmap.world_to_cell(goal[0], goal[1]))
+        if not costmap.in_bounds(sc, sr):
+            return PlanResult(False, reason=f"start ({start[0]:.2f}, {start[1]:.2f}) is off the costmap")
+        if not costmap.in_bounds(gc, gr):
+            return PlanResult(False, reason=f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is off the costmap")
+        table = self.traversal_table()
+        self._buffers(rows * cols)
+        stamp = self._stamp
+        esc_cells = self.cfg.escape_radius / res
+        esc_cost = 1.0 + self.cfg.cost_travel_multiplier * 2.0
+        s_flat, g_flat = sr * cols + sc, gr * cols + gc
+        target = g_flat
+        candidates = self._goal_candidates(costs, table, gr, gc, res)
+        if not np.isfinite(table[costs[gr, gc]]):
+            if len(candidates) == 0:
+                return PlanResult(False, reason=self._blocked_reason(costs[gr, gc], goal))
+            target = int(candidates[0])
+        found, expansions = _search.astar(costs, table, s_flat, target, self._g, self._parent, self._state,
+                                          stamp, esc_cells * esc_cells, esc_cost, self.cfg.heuristic_weight)
+        if not found:
+            # The failed search closed the start's whole component: take the nearest closed candidate.
+            reach = [int(c) for c in candidates if self._state[c] == 2 * stamp + 1] if len(candidates) else []
+            if not reach:
+                why = self._blocked_reason(costs[gr, gc], goal) if not np.isfinite(table[costs[gr, gc]]) else (
+                    f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is not reachable from the start "
+                    f"(searched {expansions} cells, tolerance {self.cfg.tolerance:.2f} m)")
+                return PlanResult(False, reason=f"no path: {why}", expansions=expansions)
+            target = reach[0]
+        cells = _search.backtrack(self._parent, target).astype(np.int64)
+        total = float(self._g[target])
+        if self.cfg.smooth_path and len(cells) > 2:
+            keep = _search.shortcut(costs, table, cells, self._g[cells], self.cfg.smoothing_slack)
+            cells = cells[keep]
+        x, y = costmap.cell_to_world(cells % cols, cells // cols)
+        pts = np.stack([x, y], axis=1)
+        pts[0] = start
+        if target == g_flat:
+            pts[-1] = goal
+        dense = densify(pts, res)
+        length = float(np.sum(np.hypot(*np.diff(dense, axis=0).T))) if len(dense) > 1 else 0.0
+        return PlanResult(True, dense, "", total, length, expansions)
+
+    def _goal_candidates(self, costs: NDArray[np.uint8], table: NDArray, gr: int, gc: int, res: float) -> NDArray:
+        """Traversable cells within ``tolerance`` of the goal cell, nearest first (flat indices)."""
+        rows, cols = costs.shape
+        k = int(math.floor(self.cfg.tolerance / res))
+        r0, r1, c0, c1 = max(0, gr - k), min(rows, gr + k + 1), max(0, gc - k), min(cols, gc + k + 1)
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        d2 = (rr - gr) ** 2 + (cc - gc) ** 2
+        ok = (d2 <= k * k) & np.isfinite(table[costs[r0:r1, c0:c1]])
+        order = np.argsort(d2[ok], kind="stable")
+        return (rr[ok] * cols + cc[ok])[order]
+
+    def _blocked_reason(self, cost: int, goal: tuple[float, float]) -> str:
+        what = {LETHAL: "in an obstacle", INSCRIBED: "too close to an obstacle",
+                NO_INFORMATION: "in unknown space (allow_unknown is false)"}.get(int(cost), "blocked")
+        return (f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is {what} and no free cell lies within "
+                f"tolerance {self.cfg.tolerance:.2f} m")
+
+
+def densify(pts: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
+    """Insert points so consecutive ones are ≤ spacing apart (controllers expect dense Nav2-style paths)."""
+    if len(pts) < 2:
+        return pts.copy()
+    out = [pts[:1]]
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        n = max(1, int(math.ceil(float(np.hypot(*(b - a))) / spacing)))
+        t = (np.arange(1, n + 1) / n)[:, None]
+        out.append(a + t * (b - a))
+    return np.vstack(out)
+
+
+def path_length(path: NDArray[np.float64]) -> float:
+    return float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0

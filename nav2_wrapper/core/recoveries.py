@@ -1,0 +1,166 @@
+"""Recovery behaviours in Nav2's default order (clear costmaps, spin, wait, back up), each a small state
+machine that emits velocity commands, and a round-robin sequencer with a retry budget."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from robonix_api.geometry import wrap_angle
+
+from .controller import HolonomicController
+from .costmap import Costmap
+
+Pose = tuple[float, float, float]
+
+
+@dataclass
+class RecoveryConfig:
+    number_of_retries: int = 6               # Nav2 navigate_to_pose BT RecoveryNode default
+    behaviors: tuple[str, ...] = ("clear_costmaps", "spin", "wait", "backup")
+    spin_dist: float = 1.57
+    max_rotational_vel: float = 1.0
+    min_rotational_vel: float = 0.4
+    rotational_acc_lim: float = 3.2
+    wait_duration: float = 5.0
+    backup_dist: float = 0.30
+    backup_speed: float = 0.05
+    time_allowance: float = 10.0
+    simulate_ahead_time: float = 2.0
+
+
+@dataclass
+class Step:
+    vx: float = 0.0
+    vy: float = 0.0
+    wz: float = 0.0
+    done: bool = False
+    ok: bool = True
+    detail: str = ""
+
+
+class Behavior:
+    name = "behavior"
+
+    def __init__(self, cfg: RecoveryConfig) -> None:
+        self.cfg = cfg
+        self.t0 = 0.0
+
+    def start(self, now: float, pose: Pose) -> None:
+        self.t0 = now
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        raise NotImplementedError
+
+    def _timed_out(self, now: float) -> bool:
+        return now - self.t0 > self.cfg.time_allowance
+
+
+class ClearCostmaps(Behavior):
+    name = "clear_costmaps"
+
+    def __init__(self, cfg: RecoveryConfig, clear: Callable[[], None]) -> None:
+        super().__init__(cfg)
+        self._clear = clear
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        self._clear()
+        return Step(done=True, detail="cleared local and global costmaps")
+
+
+class Spin(Behavior):
+    name = "spin"
+
+    def start(self, now: float, pose: Pose) -> None:
+        super().start(now, pose)
+        self._last, self._turned = pose[2], 0.0
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        c = self.cfg
+        self._turned += abs(float(wrap_angle(pose[2] - self._last)))
+        self._last = pose[2]
+        left = c.spin_dist - self._turned
+        if left <= 0.0:
+            return Step(done=True, detail=f"spun {self._turned:.2f} rad")
+        if self._timed_out(now):
+            return Step(done=True, ok=False, detail="spin timed out")
+        w = min(c.max_rotational_vel, max(c.min_rotational_vel, math.sqrt(2.0 * c.rotational_acc_lim * left)))
+        horizon = min(c.simulate_ahead_time, left / w)
+        if ctrl.trajectory_hits(np.array([[0.0, 0.0, w]]), pose, costmap, horizon)[0]:
+            return Step(done=True, ok=False, detail="spin would collide")
+        return Step(0.0, 0.0, w)
+
+
+class Wait(Behavior):
+    name = "wait"
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        if now - self.t0 >= self.cfg.wait_duration:
+            return Step(done=True, detail=f"waited {self.cfg.wait_duration:.1f} s")
+        return Step()
+
+
+class BackUp(Behavior):
+    name = "backup"
+
+    def start(self, now: float, pose: Pose) -> None:
+        super().start(now, pose)
+        self._origin = (pose[0], pose[1])
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        c = self.cfg
+        moved = math.hypot(pose[0] - self._origin[0], pose[1] - self._origin[1])
+        if moved >= c.backup_dist:
+            return Step(done=True, detail=f"backed up {moved:.2f} m")
+        if self._timed_out(now):
+            return Step(done=True, ok=False, detail="backup timed out")
+        horizon = min(c.simulate_ahead_time, (c.backup_dist - moved) / c.backup_speed)
+        if ctrl.trajectory_hits(np.array([[-c.backup_speed, 0.0, 0.0]]), pose, costmap, horizon)[0]:
+            return Step(done=True, ok=False, detail="backup would collide")
+        return Step(-c.backup_speed, 0.0, 0.0)
+
+
+class RecoverySequence:
+    """Round-robin over the behaviours; each run spends one retry of the budget (Nav2 RoundRobin + RecoveryNode)."""
+
+    def __init__(self, cfg: RecoveryConfig, clear: Callable[[], None]) -> None:
+        self.cfg = cfg
+        make = {"clear_costmaps": lambda: ClearCostmaps(cfg, clear), "spin": lambda: Spin(cfg),
+                "wait": lambda: Wait(cfg), "backup": lambda: BackUp(cfg)}
+        unknown = [b for b in cfg.behaviors if b not in make]
+        if unknown:
+            raise ValueError(f"unknown recovery behaviour(s) {unknown}; known: {sorted(make)}")
+        self._behaviors = [make[b]() for b in cfg.behaviors]
+        self.reset()
+
+    def reset(self) -> None:
+        self.used = 0
+        self._next = 0
+        self.active: Behavior | None = None
+        self.history: list[str] = []
+
+    @property
+    def exhausted(self) -> bool:
+        return self.used >= self.cfg.number_of_retries
+
+    def begin(self, now: float, pose: Pose) -> Behavior | None:
+        """Start the next behaviour, or None when the budget is spent."""
+        if self.exhausted or not self._behaviors:
+            return None
+        self.active = self._behaviors[self._next % len(self._behaviors)]
+        self._next += 1
+        self.used += 1
+        self.history.append(self.active.name)
+        self.active.start(now, pose)
+        return self.active
+
+    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+        if self.active is None:
+            return Step(done=True, ok=False, detail="no recovery running")
+        s = self.active.step(now, pose, costmap, ctrl)
+        if s.done:
+            self.active = None
+        return s
