@@ -1,0 +1,1 @@
+"""rbnx: the robonix-nav command line (build, boot, start, shutdown, validate, and atlas queries)."""

@@ -1,0 +1,291 @@
+"""`rbnx boot`: start the atlas, then every entry in order (Deferred ones parked and retried), show
+progress, wait for a signal, and shut everything down in reverse order leaving no process behind.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import socket
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from rbnx.atlas_rpc import Atlas
+from rbnx.models import ResolvedDeploy, ResolvedEntry
+from rbnx.procs import ProcGroup, proc_start_ticks, spawn, tail
+from rbnx.progress import ProgressView, Row
+from rbnx.runner import EntryRunner, Timing
+from rbnx.statefile import remove_state, state_path, write_state
+
+READY_RE = re.compile(r"atlas listening on (\S+:\d+)")
+ATLAS_READY_TIMEOUT_S = 30.0
+LOG_LEVELS = {"trace", "debug", "info", "warn", "warning", "error", "off"}
+
+
+class BootError(RuntimeError):
+    """A boot-wide failure (e.g. the atlas cannot start); one-line message."""
+
+
+@dataclass
+class BootOptions:
+    log_dir: Path
+    boot_timeout: float = 120.0
+    term_timeout: float = 30.0
+    progress: bool = True
+    verbose: bool = False
+    exit_after_boot: bool = False
+    timing: Timing = field(default_factory=Timing)
+
+
+# ---------------------------------------------------------------------- atlas
+
+
+def _split(listen: str) -> tuple[str, int]:
+    host, _, port = listen.rpartition(":")
+    return host.strip("[]"), int(port)
+
+
+def client_addr(listen: str) -> str:
+    """Where clients connect: a wildcard bind is reached over loopback."""
+    host, port = _split(listen)
+    if host in ("0.0.0.0", "", "::"):
+        host = "127.0.0.1"
+    return f"{host}:{port}"
+
+
+def port_in_use(listen: str) -> bool:
+    host, port = _split(client_addr(listen))
+    if port == 0:
+        return False
+    try:
+        with socket.create_connection((host, port), timeout=0.5):
+            return True
+    except OSError:
+        return False
+
+
+def atlas_command(listen: str) -> list[str]:
+    """The `robonix-atlas` console script of this interpreter's environment, else from PATH."""
+    here = Path(sys.executable).parent / "robonix-atlas"
+    exe = str(here) if here.exists() else shutil.which("robonix-atlas")
+    if exe:
+        return [exe, "--listen", listen]
+    return [sys.executable, "-m", "atlas.server", "--listen", listen]
+
+
+def start_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> tuple[ProcGroup, str]:
+    """Start the atlas in its own group and wait for its ready line; returns (group, client address)."""
+    if port_in_use(listen):
+        raise BootError(f"atlas: something already listens on {client_addr(listen)}; stop it or change "
+                        "system.atlas.listen")
+    env = dict(env)
+    if log and log.lower() in LOG_LEVELS:
+        env.setdefault("ROBONIX_ATLAS_LOG", log.lower())
+    group = spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+    deadline = time.monotonic() + ATLAS_READY_TIMEOUT_S
+    while time.monotonic() < deadline:
+        m = READY_RE.search(log_path.read_text(errors="replace")) if log_path.exists() else None
+        if m:
+            return group, client_addr(m.group(1))
+        if not group.running():
+            group.stop(2.0)
+            last = " | ".join(tail(log_path, 5)) or "no output"
+            raise BootError(f"atlas exited with code {group.popen.returncode} before it was ready: {last}")
+        time.sleep(0.05)
+    group.stop(5.0)
+    raise BootError(f"atlas printed no 'atlas listening on' line within {ATLAS_READY_TIMEOUT_S:g}s")
+
+
+# ---------------------------------------------------------------------- orchestration
+
+
+class Orchestrator:
+    """Starts entries one at a time; an entry that answers Deferred is parked and retried meanwhile."""
+
+    def __init__(self, entries: list[ResolvedEntry], env: dict[str, str], atlas_addr: str, opts: BootOptions,
+                 stop: threading.Event, on_change: Any = None) -> None:
+        self.atlas_addr = atlas_addr
+        self.opts = opts
+        self.stop = stop
+        self.on_change = on_change or (lambda: None)
+        self.runners = [EntryRunner(e, env, opts.log_dir / f"{e.name}.log", opts.timing) for e in entries]
+        self.view = ProgressView([Row(e.name, e.kind) for e in entries], enabled=opts.progress)
+        self._settle_order: list[EntryRunner] = []
+
+    def _sync_view(self) -> None:
+        for r in self.runners:
+            before = self.view.row(r.name)
+            if (before.state, before.detail) != (r.state, r.detail):
+                self.view.set(r.name, r.state, r.detail)
+                if r.settled and r not in self._settle_order:
+                    self._settle_order.append(r)
+                self.on_change()
+        self.view.tick()
+
+    def boot(self, deadline: float) -> bool:
+        """Run until every entry settled, the boot deadline passed, or a stop was requested."""
+        queue = list(self.runners)
+        current: EntryRunner | None = None
+        with Atlas(self.atlas_addr, timeout=2.0) as atlas:
+            while not self.stop.is_set():
+                if (current is None or current.settled or current.parked) and queue:
+                    current = queue.pop(0)
+                    current.start(self.atlas_addr, atlas)
+                    self.on_change()
+                now = time.monotonic()
+                for r in self.runners:
+                    r.step(atlas, now, deadline)
+                self._sync_view()
+                if not queue and all(r.settled for r in self.runners):
+                    break
+                self.stop.wait(0.05)
+        for r in self.runners:
+            if not r.settled:
+                r.abort()
+        self.view.finish()
+        return all(r.ok for r in self.runners)
+
+    def shutdown_order(self) -> list[EntryRunner]:
+        """Reverse of the order entries became ready (dependents first); unsettled/failed ones first."""
+        settled = [r for r in self._settle_order if r.ok]
+        rest = [r for r in self.runners if r not in settled]
+        return list(reversed(rest)) + list(reversed(settled))
+
+    def shutdown(self, term_timeout: float) -> None:
+        for r in self.shutdown_order():
+            if r.proc is None:
+                continue
+            self.view.set(r.name, "stopping")
+            outcome = r.shutdown(term_timeout)
+            self.view.set(r.name, "stopped", outcome)
+        self.view.finish()
+
+
+# ---------------------------------------------------------------------- the command
+
+
+class _Signals:
+    """SIGINT/SIGTERM set an event instead of raising, so shutdown runs in order; a second signal hurries."""
+
+    def __init__(self) -> None:
+        self.stop = threading.Event()
+        self.count = 0
+        self._old: dict[int, Any] = {}
+
+    def _handler(self, signum: int, _frame: FrameType | None) -> None:
+        self.count += 1
+        self.stop.set()
+
+    def install(self) -> None:
+        for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            self._old[s] = signal.signal(s, self._handler)
+
+    def restore(self) -> None:
+        for s, h in self._old.items():
+            signal.signal(s, h)
+
+
+def _summary(orch: Orchestrator, name: str, atlas_addr: str, elapsed: float, log_dir: Path, verbose: bool) -> None:
+    ready = [r for r in orch.runners if r.ok]
+    print(f"boot: {len(ready)}/{len(orch.runners)} entries ready in {elapsed:.2f}s "
+          f"(deploy {name!r}, atlas {atlas_addr}, logs {log_dir})", flush=True)
+    for r in orch.runners:
+        when = f"{r.ready_at - r.started_at:.2f}s" if r.ok else "-"
+        print(f"  {r.name:<20} {r.entry.kind:<9} {r.state:<9} {when:>7}  pid {r.proc.pid if r.proc else '-'}")
+    failed = [r for r in orch.runners if not r.ok]
+    if failed:
+        print("failures:")
+        for r in failed:
+            print(f"  {r.name} ({r.entry.kind}): {r.failure or r.state}  [log {r.log_path}]")
+            for line in r.log_tail[-(15 if verbose else 6):]:
+                print(f"    | {line}")
+    sys.stdout.flush()
+
+
+def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
+    """The whole boot; returns the exit code (0 all ready, 1 some failed, 130 interrupted during boot)."""
+    sig = _Signals()
+    sig.install()
+    opts.log_dir.mkdir(parents=True, exist_ok=True)
+    spath = state_path(deploy.path)
+    atlas_group: ProcGroup | None = None
+    orch: Orchestrator | None = None
+    state: dict[str, Any] = {"pid": os.getpid(), "deploy": str(deploy.path), "log_dir": str(opts.log_dir.resolve()),
+                             "started": time.time(), "atlas": None, "atlas_proc": None, "children": []}
+    state["start_ticks"] = proc_start_ticks(os.getpid())
+
+    def save() -> None:
+        if orch is not None:
+            state["children"] = [r.describe() for r in orch.runners if r.proc is not None]
+        write_state(spath, state, copy_to=opts.log_dir / "rbnx-boot.json")
+
+    code = 1
+    keep = False
+    try:
+        t0 = time.monotonic()
+        save()
+        listen = deploy.atlas_listen
+        try:
+            atlas_group, atlas_addr = start_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+        except BootError as exc:
+            print(f"rbnx boot: {exc}", file=sys.stderr)
+            return 1
+        state["atlas"] = atlas_addr
+        state["atlas_proc"] = {"pid": atlas_group.pid, "pgid": atlas_group.pgid,
+                               "start_ticks": atlas_group.start_ticks}
+        save()
+        if opts.verbose:
+            print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
+        orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
+        all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
+        save()
+        if sig.stop.is_set():
+            print("rbnx boot: interrupted; shutting down", flush=True)
+            code = 130
+        else:
+            _summary(orch, deploy.name, atlas_addr, time.monotonic() - t0, opts.log_dir, opts.verbose)
+            code = 0 if all_ok else 1
+            if opts.exit_after_boot:
+                print(f"left running; stop with: rbnx shutdown -f {deploy.path}", flush=True)
+                keep = True
+                return code
+            print(f"running; Ctrl-C or `rbnx shutdown -f {deploy.path}` to stop", flush=True)
+            reported: set[str] = set()
+            while not sig.stop.wait(0.5):
+                _report_exits(orch, atlas_group, reported)
+        return code
+    finally:
+        if not keep:
+            _teardown(orch, atlas_group, opts, sig)
+            remove_state(spath)
+        sig.restore()
+
+
+def _report_exits(orch: Orchestrator, atlas_group: ProcGroup, reported: set[str]) -> None:
+    """While waiting, say once when a supervised process exits on its own (its group is still cleaned up)."""
+    procs = [(r.name, r.proc, r.log_path) for r in orch.runners if r.proc is not None and r.ok]
+    for name, proc, log in [*procs, ("atlas", atlas_group, atlas_group.log_path)]:
+        if name not in reported and proc is not None and not proc.running():
+            reported.add(name)
+            print(f"rbnx boot: {name} exited on its own with code {proc.popen.returncode} (log {log})",
+                  file=sys.stderr, flush=True)
+
+
+def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals) -> None:
+    """Reverse-order shutdown of entries, then the atlas."""
+    if orch is None and atlas_group is None:
+        return
+    term = opts.term_timeout if sig.count < 2 else min(opts.term_timeout, 2.0)
+    print("shutting down…", flush=True)
+    if orch is not None:
+        orch.shutdown(term)
+    if atlas_group is not None:
+        atlas_group.stop(min(term, 10.0))
+        print("atlas stopped", flush=True)

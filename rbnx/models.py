@@ -1,0 +1,390 @@
+"""Pydantic models of the deploy file and package_manifest.yaml, and their loaders.
+
+Loaders never raise a traceback-worthy error for user mistakes: they collect every problem as one line
+`<file>: <key.path>: <message>` and raise ManifestProblems, which the CLI prints and maps to exit 2.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from rbnx.envexpand import apply_env_section, expand_tree
+
+KINDS: tuple[str, ...] = ("primitive", "service", "skill")
+DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
+PACKAGE_MANIFEST = "package_manifest.yaml"
+DEFAULT_DEPLOY = "robonix_manifest.yaml"
+
+
+class ManifestProblems(Exception):
+    """One or more problems with user files; `lines` are ready to print, one per problem."""
+
+    def __init__(self, lines: list[str]) -> None:
+        super().__init__("\n".join(lines))
+        self.lines = lines
+
+
+def _none_to_list(v: Any) -> Any:
+    return [] if v is None else v
+
+
+def _scalar_to_str(v: Any) -> Any:
+    """YAML turns `version: 1.0` into a float; a version is text, so accept scalars."""
+    if isinstance(v, bool):
+        return v
+    return str(v) if isinstance(v, int | float) else v
+
+
+# ---------------------------------------------------------------- package_manifest.yaml
+
+
+class PackageInfo(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    name: str = Field(min_length=1)
+    version: str
+    description: str
+    license: str
+    tags: list[str] = []
+    maintainers: list[Any] = []
+
+    _coerce = field_validator("version", "license", "description", mode="before")(_scalar_to_str)
+    _lists = field_validator("tags", "maintainers", mode="before")(_none_to_list)
+
+    @field_validator("name")
+    @classmethod
+    def _name_ok(cls, v: str) -> str:
+        if not v.strip():
+            raise ValueError("must not be empty")
+        return v
+
+
+class CapabilityRef(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    name: str = Field(min_length=1)
+    path: str | None = None
+
+
+class DependsRef(BaseModel):
+    model_config = ConfigDict(extra="ignore")
+    name: str = Field(min_length=1)
+    path: str | None = None
+    url: str | None = None
+    branch: str | None = None
+
+
+class PackageManifest(BaseModel):
+    """package_manifest.yaml; unknown keys are ignored (robonix adds keys over time)."""
+
+    model_config = ConfigDict(extra="ignore", populate_by_name=True)
+    manifestVersion: int = Field(ge=1)
+    package: PackageInfo
+    build: str | None = None
+    start: str = Field(min_length=1)
+    stop: str | None = None
+    capabilities: list[CapabilityRef] = []
+    depends: list[DependsRef] = []
+
+    _lists = field_validator("capabilities", "depends", mode="before")(_none_to_list)
+
+    @field_validator("start")
+    @classmethod
+    def _start_ok(cls, v: str) -> str:
+        if not v.strip():
+            raise ValueError("must not be empty")
+        return v
+
+
+# ---------------------------------------------------------------- deploy file
+
+
+class AtlasSystem(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    listen: str = DEFAULT_ATLAS_LISTEN
+    log: str | None = None
+
+    @field_validator("listen")
+    @classmethod
+    def _listen_ok(cls, v: str) -> str:
+        m = re.fullmatch(r"(.+):(\d{1,5})", v.strip())
+        if not m or int(m.group(2)) > 65535:
+            raise ValueError(f"expected HOST:PORT, got {v!r}")
+        return v.strip()
+
+
+class SystemSection(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    atlas: AtlasSystem = AtlasSystem()
+
+    _atlas = field_validator("atlas", mode="before")(lambda v: {} if v is None else v)
+
+
+class DeployEntry(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    name: str
+    path: str | None = None
+    url: str | None = None
+    branch: str | None = None
+    manifest: str | None = None
+    config: dict[str, Any] = {}
+
+    _cfg = field_validator("config", mode="before")(lambda v: {} if v is None else v)
+
+    @field_validator("name")
+    @classmethod
+    def _name_ok(cls, v: str) -> str:
+        if not v.strip():
+            raise ValueError("must not be empty")
+        if v != v.strip() or any(c.isspace() for c in v):
+            raise ValueError(f"must not contain whitespace: {v!r}")
+        return v
+
+
+class DeployFile(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    manifestVersion: int = Field(ge=1)
+    name: str = Field(min_length=1)
+    env: dict[str, Any] = {}
+    system: SystemSection = SystemSection()
+    primitive: list[DeployEntry] = []
+    service: list[DeployEntry] = []
+    skill: list[DeployEntry] = []
+
+    _lists = field_validator("primitive", "service", "skill", mode="before")(_none_to_list)
+    _env = field_validator("env", mode="before")(lambda v: {} if v is None else v)
+    _sys = field_validator("system", mode="before")(lambda v: {} if v is None else v)
+
+
+# ---------------------------------------------------------------- helpers
+
+
+def loc_to_path(loc: tuple[Any, ...]) -> str:
+    """('service', 1, 'name') -> 'service[1].name'."""
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out or "(top level)"
+
+
+def _msg(err: Mapping[str, Any]) -> str:
+    msg = str(err.get("msg", "invalid"))
+    if err.get("type") == "missing":
+        return "missing required key"
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    return msg[:1].lower() + msg[1:]
+
+
+def validation_lines(label: str, exc: ValidationError) -> list[str]:
+    return [f"{label}: {loc_to_path(tuple(e['loc']))}: {_msg(e)}" for e in exc.errors()]
+
+
+def read_yaml(path: Path, label: str | None = None) -> Any:
+    """Parse YAML; a syntax error becomes one `file:line: message` problem."""
+    label = label or str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ManifestProblems([f"{label}: no such file"]) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ManifestProblems([f"{label}: cannot read: {exc}"]) from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"{label}:{mark.line + 1}:{mark.column + 1}" if mark else label
+        what = " ".join(str(x) for x in (exc.problem, exc.context) if x) or "invalid YAML"
+        raise ManifestProblems([f"{where}: YAML syntax error: {what}"]) from None
+    except yaml.YAMLError as exc:
+        raise ManifestProblems([f"{label}: YAML error: {exc}"]) from None
+
+
+def detect_kind(data: Any) -> Literal["deploy", "package", "unknown"]:
+    """A package manifest has `package:`/`start:`; a deploy file lists entries or `system:`."""
+    if not isinstance(data, dict):
+        return "unknown"
+    if "package" in data or "start" in data:
+        return "package"
+    if any(k in data for k in (*KINDS, "system")):
+        return "deploy"
+    return "unknown"
+
+
+def manifest_file(root: Path, manifest: str | None) -> Path:
+    """`manifest: jetson-docker` -> package_manifest.jetson-docker.yaml; a *.yaml value is a file name."""
+    if not manifest:
+        return root / PACKAGE_MANIFEST
+    if manifest.endswith((".yaml", ".yml")):
+        return root / manifest
+    return root / f"package_manifest.{manifest}.yaml"
+
+
+def parse_package(data: Any, label: str) -> PackageManifest:
+    if data is None:
+        raise ManifestProblems([f"{label}: empty file"])
+    if not isinstance(data, dict):
+        raise ManifestProblems([f"{label}: top level must be a mapping, got {type(data).__name__}"])
+    try:
+        return PackageManifest.model_validate(data)
+    except ValidationError as exc:
+        raise ManifestProblems(validation_lines(label, exc)) from None
+
+
+def load_package(path: Path, manifest: str | None = None) -> tuple[Path, PackageManifest]:
+    """Load a package by its root directory (or manifest file); returns (root, manifest)."""
+    path = Path(path)
+    if path.is_dir():
+        root, mfile = path.resolve(), manifest_file(path.resolve(), manifest)
+    else:
+        root, mfile = path.resolve().parent, path
+    if not mfile.is_file():
+        raise ManifestProblems([f"{mfile}: no such package manifest"])
+    return root, parse_package(read_yaml(mfile), str(mfile))
+
+
+# ---------------------------------------------------------------- deploy resolution
+
+
+@dataclass
+class ResolvedEntry:
+    """One deploy entry with its package found and validated."""
+
+    name: str
+    kind: str
+    index: int
+    root: Path
+    manifest_path: Path
+    manifest: PackageManifest
+    config: dict[str, Any]
+
+    @property
+    def key(self) -> str:
+        return f"{self.kind}[{self.index}]"
+
+
+@dataclass
+class ResolvedDeploy:
+    path: Path
+    name: str
+    env: dict[str, str]
+    atlas_listen: str
+    atlas_log: str | None
+    entries: list[ResolvedEntry]
+    warnings: list[str] = field(default_factory=list)
+
+
+def packages_dir(deploy_dir: Path, env: Mapping[str, str]) -> Path:
+    """Where `url:` packages are expected as local checkouts (we never fetch)."""
+    return Path(env.get("RBNX_PACKAGES_DIR") or deploy_dir / "rbnx-packages")
+
+
+def _url_checkout(url: str, deploy_dir: Path, env: Mapping[str, str]) -> Path:
+    base = url.rstrip("/").rsplit("/", 1)[-1].removesuffix(".git")
+    return packages_dir(deploy_dir, env) / base
+
+
+def _source_problems(data: Mapping[str, Any]) -> list[tuple[tuple[Any, ...], str]]:
+    """Exactly one of path/url per entry, checked on the raw data so it is reported next to field errors."""
+    out: list[tuple[tuple[Any, ...], str]] = []
+    for kind in KINDS:
+        entries = data.get(kind)
+        if not isinstance(entries, list):
+            continue
+        for i, e in enumerate(entries):
+            if isinstance(e, dict) and (e.get("path") is None) == (e.get("url") is None):
+                out.append(((kind, i), "exactly one of 'path' or 'url' must be set"))
+    return out
+
+
+def section_order(raw: Mapping[str, Any]) -> list[str]:
+    """Entry sections in the order the file lists them (robonix's primitive, service, skill when a file
+    uses that order): the file is the boot order, so a dependent may be listed first and is retried."""
+    present = [k for k in raw if k in KINDS]
+    return present + [k for k in KINDS if k not in present]
+
+
+def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: str | None = None) -> ResolvedDeploy:
+    """Parse, expand, validate a deploy file and every package it references; all problems at once."""
+    path = Path(path)
+    label = label or str(path)
+    base_env = dict(os.environ if base_env is None else base_env)
+    raw = read_yaml(path, label)
+    if raw is None:
+        raise ManifestProblems([f"{label}: empty file"])
+    if not isinstance(raw, dict):
+        raise ManifestProblems([f"{label}: top level must be a mapping, got {type(raw).__name__}"])
+
+    problems: list[str] = []
+    env_section = raw.get("env")
+    env = base_env
+    if isinstance(env_section, dict):
+        env_problems: list[str] = []
+        env = apply_env_section(env_section, base_env, env_problems)
+        problems += [f"{label}: {p}" for p in env_problems]
+    expanded = {k: (v if k == "env" else expand_tree(v, env, str(k), problems)) for k, v in raw.items()}
+    problems = [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
+    found = _source_problems(expanded)
+    try:
+        model = DeployFile.model_validate(expanded)
+    except ValidationError as exc:
+        found += [(tuple(e["loc"]), _msg(e)) for e in exc.errors()]
+    if found:
+        order = {k: i for i, k in enumerate(expanded)}
+        found.sort(key=lambda lm: (order.get(lm[0][0], -1) if lm[0] else -1,
+                                   lm[0][1] if len(lm[0]) > 1 and isinstance(lm[0][1], int) else -1))
+        raise ManifestProblems(problems + [f"{label}: {loc_to_path(loc)}: {m}" for loc, m in found])
+    if problems:  # unexpanded paths would only add follow-on noise
+        raise ManifestProblems(problems)
+
+    warnings = [f"{label}: {k}: unknown key (ignored)" for k in (model.model_extra or {})]
+    deploy_dir = path.resolve().parent
+    seen: dict[str, str] = {}
+    entries: list[ResolvedEntry] = []
+    for kind in section_order(raw):
+        for i, e in enumerate(getattr(model, kind)):
+            key = f"{kind}[{i}]"
+            warnings += [f"{label}: {key}.{k}: unknown key (ignored)" for k in (e.model_extra or {})]
+            if e.name in seen:
+                problems.append(f"{label}: {key}.name: duplicate name {e.name!r} (first used by {seen[e.name]})")
+                continue
+            seen[e.name] = key
+            if e.path is not None:
+                root = (deploy_dir / e.path).resolve()
+                if not root.is_dir():
+                    problems.append(f"{label}: {key}.path: no such directory {e.path!r} ({root})")
+                    continue
+            else:
+                assert e.url is not None
+                root = _url_checkout(e.url, deploy_dir, env)
+                if not root.is_dir():
+                    problems.append(
+                        f"{label}: {key}.url: cannot fetch {e.url!r} (no network access); "
+                        f"clone it to {root} or use 'path:'"
+                    )
+                    continue
+            mfile = manifest_file(root, e.manifest)
+            if not mfile.is_file():
+                what = f"{key}.manifest" if e.manifest else f"{key}.path"
+                problems.append(f"{label}: {what}: package manifest not found: {mfile}")
+                continue
+            try:
+                pm = parse_package(read_yaml(mfile), str(mfile))
+            except ManifestProblems as mp:
+                problems += mp.lines
+                continue
+            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config)))
+    if problems:
+        raise ManifestProblems(problems)
+    atlas = model.system.atlas
+    return ResolvedDeploy(path.resolve(), model.name, dict(env), atlas.listen, atlas.log, entries, warnings)

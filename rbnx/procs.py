@@ -1,0 +1,225 @@
+"""Process groups for packages and the atlas: spawn, inspect via /proc, stop by PID/PGID only.
+
+Every package runs in its own session (= its own process group), so one killpg reaches the whole
+package and nothing else; /proc is read directly (no psutil) to see what is still alive.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+
+def _stat_fields(pid: int) -> list[str] | None:
+    """Fields of /proc/<pid>/stat after the command name (index 0 = state)."""
+    try:
+        data = Path(f"/proc/{pid}/stat").read_text()
+    except (FileNotFoundError, ProcessLookupError, PermissionError, OSError):
+        return None
+    return data[data.rfind(")") + 2:].split()
+
+
+def proc_state(pid: int) -> str | None:
+    f = _stat_fields(pid)
+    return f[0] if f else None
+
+
+def proc_start_ticks(pid: int) -> int | None:
+    """Start time in clock ticks since boot; pairs with a PID to survive PID reuse."""
+    f = _stat_fields(pid)
+    return int(f[19]) if f else None
+
+
+def pid_alive(pid: int, start_ticks: int | None = None) -> bool:
+    """Running (not a zombie) and, when given, the same process as recorded."""
+    f = _stat_fields(pid)
+    if not f or f[0] in ("Z", "X"):
+        return False
+    return start_ticks is None or int(f[19]) == start_ticks
+
+
+def _all_pids() -> list[int]:
+    return [int(n) for n in os.listdir("/proc") if n.isdigit()]
+
+
+def group_members(pgid: int) -> list[int]:
+    """Live (non-zombie) processes whose process group is `pgid`."""
+    out = []
+    for pid in _all_pids():
+        f = _stat_fields(pid)
+        if f and f[0] not in ("Z", "X") and int(f[2]) == pgid:
+            out.append(pid)
+    return out
+
+
+def descendants(pid: int) -> list[int]:
+    """Live descendants of `pid` (by parent links), including ones that left the group with setsid."""
+    children: dict[int, list[int]] = {}
+    for p in _all_pids():
+        f = _stat_fields(p)
+        if f and f[0] not in ("Z", "X"):
+            children.setdefault(int(f[1]), []).append(p)
+    out, todo = [], [pid]
+    while todo:
+        for c in children.get(todo.pop(), []):
+            out.append(c)
+            todo.append(c)
+    return out
+
+
+def tail(path: Path, n: int = 15) -> list[str]:
+    try:
+        lines = path.read_text(errors="replace").splitlines()
+    except OSError:
+        return []
+    return lines[-n:]
+
+
+@dataclass
+class ProcGroup:
+    """A spawned shell command in its own session; pgid == pid of the leader."""
+
+    name: str
+    popen: subprocess.Popen[bytes]
+    log_path: Path | None
+    start_ticks: int | None
+    extra_pids: set[int]
+
+    @property
+    def pid(self) -> int:
+        return self.popen.pid
+
+    @property
+    def pgid(self) -> int:
+        return self.popen.pid
+
+    def running(self) -> bool:
+        """Leader still running (reaps it if it exited)."""
+        return self.popen.poll() is None
+
+    def remember_descendants(self) -> None:
+        """Note children that may escape the group (setsid) so stop() can reach them too."""
+        if self.running():
+            self.extra_pids.update(descendants(self.pid))
+
+    def alive_pids(self) -> list[int]:
+        self.popen.poll()
+        pids = set(group_members(self.pgid)) | {p for p in self.extra_pids if pid_alive(p)}
+        if self.popen.returncode is None:
+            pids.add(self.pid)
+        return sorted(pids)
+
+    def signal(self, sig: int) -> None:
+        try:
+            os.killpg(self.pgid, sig)
+        except (ProcessLookupError, PermissionError):
+            pass
+        for p in list(self.extra_pids):
+            if pid_alive(p):
+                try:
+                    os.kill(p, sig)
+                except (ProcessLookupError, PermissionError):
+                    pass
+
+    def wait_gone(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while True:
+            if not self.alive_pids():
+                return True
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.05)
+
+    def stop(self, term_timeout: float = 30.0) -> str:
+        """SIGTERM the group, wait, then SIGKILL; returns how it ended ('exited'|'terminated'|'killed')."""
+        self.remember_descendants()
+        if not self.alive_pids():
+            return "exited"
+        self.signal(signal.SIGTERM)
+        if self.wait_gone(term_timeout):
+            return "terminated"
+        self.signal(signal.SIGKILL)
+        self.wait_gone(10.0)
+        return "killed"
+
+
+def spawn(name: str, command: list[str], cwd: Path, env: Mapping[str, str], log_path: Path | None,
+          append: bool = False) -> ProcGroup:
+    """Start `command` in a new session with stdout+stderr to `log_path` (or inherited when None)."""
+    out = open(log_path, "ab" if append else "wb") if log_path else None  # noqa: SIM115
+    try:
+        popen = subprocess.Popen(
+            command, cwd=str(cwd), env=dict(env), stdin=subprocess.DEVNULL,
+            stdout=out, stderr=subprocess.STDOUT if out else None, start_new_session=True,
+        )
+    finally:
+        if out:
+            out.close()
+    return ProcGroup(name, popen, log_path, proc_start_ticks(popen.pid), set())
+
+
+def run_hook(name: str, script: str, cwd: Path, env: Mapping[str, str], log_path: Path | None,
+             timeout: float) -> tuple[bool, str]:
+    """Run a build/stop hook with `bash -c` in its own group; kill the group when it overruns."""
+    group = spawn(name, ["bash", "-c", script], cwd, env, log_path, append=True)
+    try:
+        rc = group.popen.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        group.stop(term_timeout=2.0)
+        return False, f"timed out after {timeout:g}s"
+    finally:
+        if group.alive_pids():
+            group.stop(term_timeout=2.0)
+    return rc == 0, f"exit code {rc}"
+
+
+def stop_recorded(pid: int | None, pgid: int | None, start_ticks: int | None,
+                  extra: list[tuple[int, int | None]], term_timeout: float) -> str:
+    """Stop a group this rbnx did not spawn itself (from a state file): same TERM → KILL ladder.
+
+    Safe against PID reuse: the leader is signalled only if its start time matches, and a PGID cannot be
+    handed out again while any member of the group still lives.
+    """
+
+    extra_pids = [p for p, t in extra if pid_alive(p, t)]
+
+    def alive() -> list[int]:
+        pids = set(group_members(pgid)) if pgid else set()
+        if pid and pid_alive(pid, start_ticks):
+            pids.add(pid)
+        return sorted(pids | {p for p in extra_pids if pid_alive(p)})
+
+    def send(sig: int) -> None:
+        if pgid and group_members(pgid):
+            try:
+                os.killpg(pgid, sig)
+            except (ProcessLookupError, PermissionError):
+                pass
+        for p in [*extra_pids, *([pid] if pid and pid_alive(pid, start_ticks) else [])]:
+            if pid_alive(p):
+                try:
+                    os.kill(p, sig)
+                except (ProcessLookupError, PermissionError):
+                    pass
+
+    def wait(timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while alive():
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.05)
+        return True
+
+    if not alive():
+        return "exited"
+    send(signal.SIGTERM)
+    if wait(term_timeout):
+        return "terminated"
+    send(signal.SIGKILL)
+    wait(10.0)
+    return "killed"
