@@ -1,0 +1,353 @@
+"""Typed client of the atlas registry (``robonix.atlas.Atlas``), with robonix's SDK names.
+
+``ATLAS`` is the module-level instance every provider uses; it resolves ``$ROBONIX_ATLAS`` (default
+``127.0.0.1:50051``) and connects on first use, so importing the SDK never touches the network.
+Arguments naming a kind, transport or state accept the enum, its int, or a string (``"ros2"``).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import grpc
+
+from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
+from robonix_api.types import (
+    Capability,
+    CapabilityProvider,
+    Channel,
+    ContractDescriptor,
+    Kind,
+    LifecycleState,
+    Transport,
+    TransportParams,
+    default_params,
+    params_from_pb,
+    params_to_pb,
+)
+
+log = logging.getLogger(__name__)
+
+DEFAULT_ADDRESS = "127.0.0.1:50051"
+#: Per-call deadline; generous because a loaded CI box can stall a loopback call for a while.
+DEFAULT_TIMEOUT_S = 10.0
+
+
+def default_address() -> str:
+    return os.environ.get("ROBONIX_ATLAS", "").strip() or DEFAULT_ADDRESS
+
+
+class HeartbeatHandle:
+    """A background heartbeat loop; ``stop()`` ends it (and joins the thread)."""
+
+    def __init__(
+        self,
+        client: AtlasClient,
+        id: str,
+        period_s: float,
+        on_not_found: Callable[[], None] | None,
+    ) -> None:
+        self.id = id
+        self.period_s = float(period_s)
+        self._client = client
+        self._on_not_found = on_not_found
+        self._stop = threading.Event()
+        self.beats = 0  # successful heartbeats, handy for tests and diagnostics
+        self._thread = threading.Thread(target=self._run, name=f"atlas-heartbeat-{id}", daemon=True)
+        self._thread.start()
+
+    @property
+    def running(self) -> bool:
+        return self._thread.is_alive()
+
+    def _run(self) -> None:
+        unavailable_logged = False
+        while not self._stop.wait(self.period_s):
+            try:
+                self._client.heartbeat(self.id)
+                self.beats += 1
+                if unavailable_logged:
+                    log.info("heartbeat %s: atlas %s reachable again", self.id, self._client.address)
+                unavailable_logged = False
+            except grpc.RpcError as exc:
+                code = exc.code() if hasattr(exc, "code") else None
+                if code == grpc.StatusCode.NOT_FOUND:
+                    log.warning("heartbeat %s: atlas does not know us (restarted?)", self.id)
+                    if self._on_not_found is not None:
+                        try:
+                            self._on_not_found()
+                        except Exception:
+                            log.exception("heartbeat %s: on_not_found callback failed", self.id)
+                elif not unavailable_logged:
+                    log.warning(
+                        "heartbeat %s: atlas %s: %s (will keep trying)", self.id, self._client.address, code
+                    )
+                    unavailable_logged = True
+            except Exception:
+                log.exception("heartbeat %s: unexpected error", self.id)
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+
+
+class AtlasClient:
+    """Thread-safe, lazily connected atlas client. Errors surface as ``grpc.RpcError`` (status codes as
+    in the spec) except where noted; argument parsing errors are ``ValueError``."""
+
+    def __init__(self, address: str | None = None) -> None:
+        self._address = address
+        self._lock = threading.Lock()
+        self._channel: grpc.Channel | None = None
+        self._stub: atlas_pb2_grpc.AtlasStub | None = None
+        self.timeout = DEFAULT_TIMEOUT_S
+
+    # ----------------------------------------------------------------- connection
+
+    @property
+    def address(self) -> str:
+        """The atlas address (``$ROBONIX_ATLAS`` is read at first use when none was given)."""
+        return self._address or default_address()
+
+    @property
+    def stub(self) -> atlas_pb2_grpc.AtlasStub:
+        """The raw generated stub (connects on first access)."""
+        stub = self._stub
+        if stub is not None:
+            return stub
+        with self._lock:
+            if self._stub is None:
+                if self._address is None:
+                    self._address = default_address()
+                self._channel = grpc.insecure_channel(self._address, options=[("grpc.enable_http_proxy", 0)])
+                self._stub = atlas_pb2_grpc.AtlasStub(self._channel)
+            return self._stub
+
+    def close(self) -> None:
+        """Close the channel; the client reconnects lazily if used again."""
+        with self._lock:
+            channel, self._channel, self._stub = self._channel, None, None
+        if channel is not None:
+            channel.close()
+
+    def __enter__(self) -> AtlasClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def wait_ready(self, timeout: float = 10.0) -> None:
+        """Block until the atlas channel is connected; ``grpc.FutureTimeoutError`` otherwise."""
+        self.stub  # noqa: B018 (creates the channel)
+        assert self._channel is not None
+        grpc.channel_ready_future(self._channel).result(timeout=timeout)
+
+    # ----------------------------------------------------------------- providers
+
+    def register(
+        self,
+        kind: Kind | int | str,
+        id: str,
+        namespace: str,
+        capability_md_path: str = "",
+        capability_md: str = "",
+    ) -> str:
+        """Register (or take over) a provider; returns its id (assigned by the atlas when empty)."""
+        k = Kind.parse(kind)
+        rpc = {
+            Kind.PRIMITIVE: self.stub.RegisterPrimitive,
+            Kind.SERVICE: self.stub.RegisterService,
+            Kind.SKILL: self.stub.RegisterSkill,
+        }.get(k)
+        if rpc is None:
+            raise ValueError("kind: must be primitive, service or skill")
+        req = atlas_pb2.RegisterRequest(
+            id=id, namespace=namespace, capability_md_path=capability_md_path, capability_md=capability_md
+        )
+        return rpc(req, timeout=self.timeout).id
+
+    def register_primitive(
+        self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
+    ) -> str:
+        return self.register(Kind.PRIMITIVE, id, namespace, capability_md_path, capability_md)
+
+    def register_service(
+        self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
+    ) -> str:
+        return self.register(Kind.SERVICE, id, namespace, capability_md_path, capability_md)
+
+    def register_skill(
+        self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
+    ) -> str:
+        return self.register(Kind.SKILL, id, namespace, capability_md_path, capability_md)
+
+    def unregister(self, id: str) -> bool:
+        return self.stub.Unregister(atlas_pb2.UnregisterRequest(id=id), timeout=self.timeout).was_present
+
+    def heartbeat(self, id: str) -> None:
+        """Raises ``grpc.RpcError`` (NOT_FOUND when the atlas does not know ``id``)."""
+        self.stub.Heartbeat(atlas_pb2.HeartbeatRequest(id=id), timeout=self.timeout)
+
+    def set_state(self, id: str, state: LifecycleState | int | str, detail: str = "") -> LifecycleState:
+        """Push a lifecycle state; returns the previous one."""
+        req = atlas_pb2.SetLifecycleStateRequest(id=id, state=int(LifecycleState.parse(state)), detail=detail)
+        prev = self.stub.SetLifecycleState(req, timeout=self.timeout).previous_state
+        return (
+            LifecycleState(prev) if prev in LifecycleState._value2member_map_ else LifecycleState.UNSPECIFIED
+        )
+
+    def start_heartbeat(
+        self, id: str, period_s: float = 30.0, on_not_found: Callable[[], None] | None = None
+    ) -> HeartbeatHandle:
+        """Heartbeat ``id`` every ``period_s`` on a daemon thread. ``on_not_found`` runs when the atlas
+        answers NOT_FOUND (it restarted): the SDK re-registers and re-declares there. An unreachable
+        atlas is logged once and retried every period."""
+        if period_s <= 0:
+            raise ValueError("period_s: must be > 0")
+        return HeartbeatHandle(self, id, period_s, on_not_found)
+
+    # ----------------------------------------------------------------- capabilities
+
+    def declare_capability(
+        self,
+        provider_id: str,
+        contract_id: str,
+        endpoint: str,
+        transport: Transport | int | str,
+        params: TransportParams | None = None,
+        description: str = "",
+    ) -> str:
+        """Declare a capability; returns the endpoint the atlas stored (a ROS 2 name may be minted or
+        rewritten on collision). Omitted params become empty params of the transport's kind."""
+        t = Transport.parse(transport)
+        if params is None:
+            params = default_params(t)
+        req = atlas_pb2.DeclareCapabilityRequest(
+            provider_id=provider_id,
+            contract_id=contract_id,
+            transport=int(t),
+            endpoint=endpoint,
+            description=description,
+        )
+        if params is not None:
+            params_to_pb(params, req.params)
+        return self.stub.DeclareCapability(req, timeout=self.timeout).endpoint
+
+    def query(
+        self,
+        *,
+        kind: Kind | int | str | None = None,
+        id: str = "",
+        contract_id: str = "",
+        transport: Transport | int | str | None = None,
+        namespace_prefix: str = "",
+    ) -> list[CapabilityProvider]:
+        """Raw Query (server-side filters only; TERMINATED providers included)."""
+        req = atlas_pb2.QueryRequest(
+            kind=int(Kind.parse(kind)),
+            id=id,
+            contract_id=contract_id,
+            transport=int(Transport.parse(transport)),
+            namespace_prefix=namespace_prefix,
+        )
+        resp = self.stub.Query(req, timeout=self.timeout)
+        return [CapabilityProvider.from_pb(p) for p in resp.providers]
+
+    def find_capability(
+        self,
+        *,
+        contract_id: str,
+        transport: Transport | int | str | None = None,
+        provider_kind: Kind | int | str | None = None,
+        provider_id: str | None = None,
+        namespace_prefix: str = "",
+    ) -> list[Capability]:
+        """Live capabilities matching the filters (Query plus the client-side filter robonix's SDK does:
+        exact contract and transport, TERMINATED providers left out)."""
+        if not contract_id:
+            raise ValueError("contract_id: must not be empty")
+        t = Transport.parse(transport)
+        out: list[Capability] = []
+        for p in self.query(
+            kind=provider_kind,
+            id=provider_id or "",
+            contract_id=contract_id,
+            transport=t,
+            namespace_prefix=namespace_prefix,
+        ):
+            if p.state == LifecycleState.TERMINATED:
+                continue
+            for cap in p.capabilities:
+                if cap.contract_id == contract_id and (not t or cap.transport == t):
+                    out.append(cap)
+        return out
+
+    def find_unique_capability(self, **filters: Any) -> Capability:
+        """Exactly one match of ``find_capability(**filters)``; ValueError naming the contract and the
+        candidates otherwise (pin one with ``provider_id``)."""
+        caps = self.find_capability(**filters)
+        if len(caps) == 1:
+            return caps[0]
+        cid = filters.get("contract_id", "")
+        extra = ", ".join(
+            f"{k}={v!r}" for k, v in filters.items() if k != "contract_id" and v not in (None, "")
+        )
+        where = f" ({extra})" if extra else ""
+        if not caps:
+            raise ValueError(f"no live provider offers contract {cid!r}{where}")
+        cands = ", ".join(sorted(f"{c.provider_id} [{c.transport.label}]" for c in caps))
+        raise ValueError(
+            f"contract {cid!r}{where} is offered by {len(caps)} candidates: {cands}; pin one with provider_id"
+        )
+
+    def connect_capability(
+        self, *, consumer_id: str, provider_id: str, contract_id: str, transport: Transport | int | str
+    ) -> Channel:
+        """Open a channel; the returned Channel closes itself on ``close()`` or leaving a ``with``."""
+        t = Transport.parse(transport)
+        req = atlas_pb2.ConnectCapabilityRequest(
+            consumer_id=consumer_id, provider_id=provider_id, contract_id=contract_id, transport=int(t)
+        )
+        resp = self.stub.ConnectCapability(req, timeout=self.timeout)
+        return Channel(
+            channel_id=resp.channel_id,
+            endpoint=resp.endpoint,
+            params=params_from_pb(resp.params) if resp.HasField("params") else None,
+            provider_id=provider_id,
+            contract_id=contract_id,
+            transport=t,
+            _client=self,
+        )
+
+    def disconnect(self, channel_id: str) -> bool:
+        req = atlas_pb2.DisconnectCapabilityRequest(channel_id=channel_id)
+        return self.stub.DisconnectCapability(req, timeout=self.timeout).was_open
+
+    # ----------------------------------------------------------------- contracts & inspection
+
+    def query_contract(self, contract_id: str) -> ContractDescriptor | None:
+        resp = self.stub.QueryContract(
+            atlas_pb2.QueryContractRequest(contract_id=contract_id), timeout=self.timeout
+        )
+        return ContractDescriptor.from_pb(resp.contract) if resp.found else None
+
+    def list_contracts(self, prefix: str = "") -> list[ContractDescriptor]:
+        resp = self.stub.ListContracts(
+            atlas_pb2.ListContractsRequest(namespace_prefix=prefix), timeout=self.timeout
+        )
+        return [ContractDescriptor.from_pb(c) for c in resp.contracts]
+
+    def inspect(self) -> dict[str, Any]:
+        return json.loads(self.stub.InspectAtlas(atlas_pb2.InspectAtlasRequest(), timeout=self.timeout).json)
+
+
+#: The default client. It reads ``$ROBONIX_ATLAS`` when it first connects, not at import.
+ATLAS: AtlasClient = AtlasClient()
+
+__all__ = ["ATLAS", "AtlasClient", "HeartbeatHandle", "default_address"]
