@@ -1,0 +1,21 @@
+"""``python -m hal_panda_mobile``: register with the atlas, serve the Driver, run until shutdown."""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+
+
+def main() -> int:
+    logging.basicConfig(level=os.environ.get("HAL_LOG_LEVEL", "INFO").upper(),
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    from hal_panda_mobile.provider import build_provider
+
+    hal = build_provider()
+    hal.prim.run()  # blocks until CMD_SHUTDOWN or SIGTERM/SIGINT; tears down cleanly
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,223 @@
+"""The sim loop thread: steps physics in chunks, paces to ``real_time_factor``, publishes on sim time.
+
+One thread owns the (not thread-safe) simulator; RPC handlers and the /cmd_vel callback reach it
+through ``call()``, which takes the same lock the loop holds while stepping one chunk (<= one clock
+period of sim time), so they never wait long.
+
+Modes: ``ACTIVE`` steps and publishes at the configured sim-time rates. ``held`` (before the first
+ACTIVATE and after DEACTIVATE) freezes sim time and republishes the current state (/clock, /odom,
+TF, /scan, ground truth) at ``hold_rate_hz`` of wall time, so consumers can still resolve frames. On
+DEACTIVATE the base is first braked to rest (<= 2 s of sim time, still paced) and /cmd_vel is ignored.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+from hal_panda_mobile.outputs import Outputs, Snapshot
+from hal_panda_mobile.sim import PandaMobileSim
+
+log = logging.getLogger("hal_panda_mobile.runner")
+T = TypeVar("T")
+
+HELD, ACTIVE, BRAKING, STOPPED = "held", "active", "braking", "stopped"
+BRAKE_MAX_S = 2.0  # sim seconds allowed to come to rest on DEACTIVATE
+REST_SPEED = 1e-3  # m/s and rad/s
+LAG_RESET_S = 0.5  # wall seconds behind schedule before the pacing anchor is reset (no catch-up burst)
+
+
+@dataclass(frozen=True)
+class LoopRates:
+    """Sim-time rates (Hz); ``None`` disables that output."""
+
+    odom: float
+    scan: float
+    clock: float | None
+    ground_truth: float | None
+    hold: float = 1.0
+
+
+@dataclass
+class LoopStats:
+    chunks: int = 0
+    errors: int = 0
+    last_error: str = ""
+    lag_resets: int = 0
+    active_wall_s: float = 0.0
+    active_sim_s: float = 0.0
+    cmd_ignored: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def achieved_rtf(self) -> float:
+        return self.active_sim_s / self.active_wall_s if self.active_wall_s > 0 else 0.0
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"chunks": self.chunks, "errors": self.errors, "last_error": self.last_error,
+                "lag_resets": self.lag_resets, "active_wall_s": round(self.active_wall_s, 3),
+                "active_sim_s": round(self.active_sim_s, 3), "achieved_rtf": round(self.achieved_rtf, 3),
+                "cmd_ignored": self.cmd_ignored, **self.extra}
+
+
+class SimRunner:
+    def __init__(self, sim: PandaMobileSim, outputs: Outputs, rates: LoopRates, *, real_time_factor: float,
+                 use_sim_time: bool = True) -> None:
+        self.sim, self.outputs, self.rates = sim, outputs, rates
+        self.rtf = real_time_factor
+        self.use_sim_time = use_sim_time
+        self.stats = LoopStats()
+        self._lock = threading.RLock()
+        self._wake = threading.Event()
+        self._mode = HELD
+        self._republish = True  # publish the initial state at once
+        self._brake_until = 0.0
+        t = sim.time
+        self._due = {"odom": t, "scan": t, "clock": t, "ground_truth": t}
+        self._periods = {"odom": 1.0 / rates.odom, "scan": 1.0 / rates.scan,
+                         "clock": 1.0 / rates.clock if rates.clock else math.inf,
+                         "ground_truth": 1.0 / rates.ground_truth if rates.ground_truth else math.inf}
+        self._thread = threading.Thread(target=self._run, name="hal-sim-loop", daemon=True)
+
+    # ------------------------------------------------------------------ control (any thread)
+    @property
+    def mode(self) -> str:
+        return self._mode
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def activate(self) -> None:
+        with self._lock:
+            self._mode = ACTIVE
+        self._wake.set()
+
+    def deactivate(self) -> None:
+        """Zero the command, brake to rest (paced), then hold with sim time frozen."""
+        with self._lock:
+            self.sim.stop()
+            self._brake_until = self.sim.time + BRAKE_MAX_S
+            self._mode = BRAKING
+        self._wake.set()
+
+    def stop(self, timeout_s: float = 10.0) -> None:
+        with self._lock:
+            self._mode = STOPPED
+        self._wake.set()
+        if self._thread.is_alive() and self._thread is not threading.current_thread():
+            self._thread.join(timeout_s)
+
+    def call(self, fn: Callable[[PandaMobileSim], T], *, republish: bool = False) -> T:
+        """Run ``fn(sim)`` under the sim lock; ``republish`` pushes the new state out at once."""
+        with self._lock:
+            result = fn(self.sim)
+            if republish:
+                self._republish = True
+        if republish:
+            self._wake.set()
+        return result
+
+    def cmd_vel(self, vx: float, vy: float, wz: float, vz: float = 0.0, wx: float = 0.0, wy: float = 0.0) -> bool:
+        """Body twist stamped with the current sim time; ignored (False) unless ACTIVE."""
+        with self._lock:
+            if self._mode != ACTIVE:
+                self.stats.cmd_ignored += 1
+                return False
+            self.sim.set_cmd_vel(vx, vy, wz, self.sim.time, vz=vz, wx=wx, wy=wy)
+            return True
+
+    # ------------------------------------------------------------------ loop (own thread)
+    def _stamp(self, t: float) -> float:
+        return t if self.use_sim_time else time.time()
+
+    def _run(self) -> None:
+        anchor_wall, anchor_sim = time.monotonic(), self.sim.time
+        was_stepping = False
+        while self._mode != STOPPED:
+            try:
+                stepping = self._mode in (ACTIVE, BRAKING)
+                if not stepping:
+                    was_stepping = False
+                    self._hold_once()
+                    continue
+                if not was_stepping:  # (re)start pacing from here
+                    anchor_wall, anchor_sim = time.monotonic(), self.sim.time
+                    was_stepping = True
+                t0 = time.monotonic()
+                sim0 = self.sim.time
+                self._step_chunk()
+                self.stats.active_sim_s += self.sim.time - sim0
+                if self.rtf > 0:
+                    target = anchor_wall + (self.sim.time - anchor_sim) / self.rtf
+                    delay = target - time.monotonic()
+                    if delay > 0:
+                        self._wake.wait(delay)
+                        self._wake.clear()
+                    elif -delay > LAG_RESET_S:
+                        self.stats.lag_resets += 1
+                        anchor_wall, anchor_sim = time.monotonic(), self.sim.time
+                self.stats.active_wall_s += time.monotonic() - t0
+            except Exception as exc:  # keep the sim alive; the error is counted and logged
+                self.stats.errors += 1
+                self.stats.last_error = f"{type(exc).__name__}: {exc}"
+                log.exception("sim loop iteration failed (%d so far)", self.stats.errors)
+                time.sleep(0.05)
+
+    def _hold_once(self) -> None:
+        with self._lock:
+            due = self._republish
+            self._republish = False
+            snap = self._snapshot(everything=True) if due else None
+        if snap is not None:
+            self.outputs.publish(snap)
+            return
+        if self._wake.wait(1.0 / self.rates.hold):
+            self._wake.clear()
+            return
+        with self._lock:
+            if self._mode == HELD:
+                self._republish = True
+
+    def _step_chunk(self) -> None:
+        with self._lock:
+            sim = self.sim
+            nxt = min(self._due.values())
+            n = max(1, math.ceil((nxt - sim.time) / sim.timestep - 1e-9))
+            sim.step(n)
+            self.stats.chunks += 1
+            snap = self._snapshot(everything=self._republish)
+            self._republish = False
+            if self._mode == BRAKING:
+                gt = sim.ground_truth()
+                if max(abs(v) for v in gt[3:]) < REST_SPEED or sim.time >= self._brake_until:
+                    self._mode = HELD
+                    log.info("braked to rest at sim t=%.3f; holding", sim.time)
+        if snap is not None:
+            self.outputs.publish(snap)
+
+    def _snapshot(self, everything: bool) -> Snapshot | None:
+        """Read the outputs that are due (all of them with ``everything``) and advance their schedule."""
+        sim, t = self.sim, self.sim.time
+        due = {k for k, when in self._due.items() if everything or t >= when - 1e-9}
+        if not due:
+            return None
+        for k in due:
+            p = self._periods[k]
+            if math.isfinite(p):
+                nxt = self._due[k]
+                while nxt <= t + 1e-9:
+                    nxt += p
+                self._due[k] = nxt
+            else:
+                self._due[k] = math.inf
+        want = {k for k in due if math.isfinite(self._periods[k])}
+        return Snapshot(t=t, stamp=self._stamp(t),
+                        odom=sim.odometry() if "odom" in want else None,
+                        ground_truth=sim.ground_truth() if "ground_truth" in want else None,
+                        scan=sim.scan() if "scan" in want else None,
+                        clock="clock" in want)
