@@ -144,7 +144,9 @@ def test_set_state_rules(reg: Registry) -> None:
         reg.set_state("chassis", LifecycleState.UNSPECIFIED)
     with err("NOT_FOUND", "id"):
         reg.set_state("ghost", LifecycleState.ACTIVE)
-    assert reg.set_state("chassis", LifecycleState.ACTIVE, "skip") == LifecycleState.REGISTERED  # odd edge: stored
+    assert (
+        reg.set_state("chassis", LifecycleState.ACTIVE, "skip") == LifecycleState.REGISTERED
+    )  # odd edge: stored
     assert reg.set_state("chassis", LifecycleState.INACTIVE) == LifecycleState.ACTIVE
     assert reg.query(id="chassis")[0].state == LifecycleState.INACTIVE
 
@@ -374,7 +376,16 @@ def test_snapshot_is_json(reg: Registry) -> None:
 
 @pytest.mark.parametrize(
     "name",
-    ["/odom", "odom", "/rbnx/robonix/primitive/chassis/odom/t1a2b3c4d", "~", "~/scan", "/a_b/c1", "_x", "/A/B9"],
+    [
+        "/odom",
+        "odom",
+        "/rbnx/robonix/primitive/chassis/odom/t1a2b3c4d",
+        "~",
+        "~/scan",
+        "/a_b/c1",
+        "_x",
+        "/A/B9",
+    ],
 )
 def test_valid_ros2_names(name: str) -> None:
     assert is_valid_ros2_name(name)

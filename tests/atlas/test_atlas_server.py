@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 import threading
 import time
 
@@ -12,7 +13,7 @@ import pytest
 from atlas.server import AtlasServer
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import atlas_pb2 as pb
-from robonix_api.types import GrpcParams, Kind, LifecycleState, McpParams, Ros2Params, Transport
+from robonix_api.types import Kind, LifecycleState, McpParams, Ros2Params, Transport
 
 ODOM = "robonix/primitive/chassis/odom"
 SCAN = "robonix/primitive/lidar/lidar"
@@ -72,7 +73,9 @@ def test_declare_rules_over_grpc(stub, uid: str) -> None:
     grpc_params = pb.TransportParams(grpc=pb.GrpcParams(proto_file="robonix_contracts.proto"))
 
     def declare(pid, cid, transport, endpoint, params):
-        req = pb.DeclareCapabilityRequest(provider_id=pid, contract_id=cid, transport=transport, endpoint=endpoint)
+        req = pb.DeclareCapabilityRequest(
+            provider_id=pid, contract_id=cid, transport=transport, endpoint=endpoint
+        )
         if params is not None:
             req.params.CopyFrom(params)
         return stub.DeclareCapability(req).endpoint
@@ -120,7 +123,10 @@ def test_connect_and_contracts_over_grpc(stub, uid: str) -> None:
     e = rpc_error(stub.QueryContract, pb.QueryContractRequest(contract_id=""))
     assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
 
-    ids = [c.id for c in stub.ListContracts(pb.ListContractsRequest(namespace_prefix="robonix/service/")).contracts]
+    ids = [
+        c.id
+        for c in stub.ListContracts(pb.ListContractsRequest(namespace_prefix="robonix/service/")).contracts
+    ]
     assert ids == sorted(ids) and ids and all(i.startswith("robonix/service/") for i in ids)
     assert len(stub.ListContracts(pb.ListContractsRequest()).contracts) >= 31
     snap = json.loads(stub.InspectAtlas(pb.InspectAtlasRequest()).json)
@@ -132,13 +138,18 @@ def test_connect_and_contracts_over_grpc(stub, uid: str) -> None:
 
 def test_client_end_to_end(client: AtlasClient, uid: str) -> None:
     chassis, mapping = f"chassis-{uid}", f"mapping-{uid}"
-    assert client.register("primitive", chassis, "robonix/primitive/chassis", capability_md="# chassis") == chassis
+    assert (
+        client.register("primitive", chassis, "robonix/primitive/chassis", capability_md="# chassis")
+        == chassis
+    )
     client.register_service(mapping, "robonix/service/map")
     odom_topic = client.declare_capability(chassis, ODOM, f"/odom_{uid}", "ros2", Ros2Params("reliable"))
     assert odom_topic == f"/odom_{uid}"
     client.declare_capability(chassis, DRIVER, "127.0.0.1:1", Transport.GRPC)  # default (empty) params
     mcp_ep = "http://127.0.0.1:2/mcp/"
-    client.declare_capability(mapping, ODOM, mcp_ep, 3, McpParams('{"type": "object"}'), description="odom tool")
+    client.declare_capability(
+        mapping, ODOM, mcp_ep, 3, McpParams('{"type": "object"}'), description="odom tool"
+    )
 
     assert client.set_state(chassis, "active") == LifecycleState.INACTIVE
     [p] = client.query(id=chassis)
@@ -155,14 +166,18 @@ def test_client_end_to_end(client: AtlasClient, uid: str) -> None:
     with pytest.raises(ValueError, match=rf"{chassis}.*{mapping}|{mapping}.*{chassis}"):
         client.find_unique_capability(contract_id=ODOM, namespace_prefix="robonix/")
 
-    with client.connect_capability(consumer_id="nav", provider_id=chassis, contract_id=ODOM, transport="ros2") as ch:
+    with client.connect_capability(
+        consumer_id="nav", provider_id=chassis, contract_id=ODOM, transport="ros2"
+    ) as ch:
         assert ch.endpoint == odom_topic and ch.qos_profile == "reliable" and ch.provider_id == chassis
         assert any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])
     assert not any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])
     assert ch.close() is False  # idempotent
 
     with pytest.raises(grpc.RpcError) as info:
-        client.connect_capability(consumer_id="nav", provider_id=chassis, contract_id="robonix/x", transport="ros2")
+        client.connect_capability(
+            consumer_id="nav", provider_id=chassis, contract_id="robonix/x", transport="ros2"
+        )
     assert info.value.code() == grpc.StatusCode.NOT_FOUND
 
     # TERMINATED providers are invisible to find_capability but still in raw query
@@ -203,8 +218,14 @@ def test_heartbeat_handle_calls_on_not_found(client: AtlasClient, uid: str) -> N
     client.unregister(pid)
 
 
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
 def test_heartbeat_survives_unavailable_atlas() -> None:
-    dead = AtlasClient("127.0.0.1:1")  # nothing listens on port 1
+    dead = AtlasClient(f"127.0.0.1:{_free_port()}")  # nothing listens there
     dead.timeout = 0.5
     handle = dead.start_heartbeat("x", period_s=0.02, on_not_found=lambda: None)
     try:
@@ -241,19 +262,27 @@ def test_eviction_terminates_drops_channels_and_allows_reregister() -> None:
         registry.heartbeat_timeout_ms = 0
         client.register_primitive("lapsing", "robonix/primitive/chassis")
         client.declare_capability("lapsing", ODOM, "/odom", "ros2", Ros2Params("reliable"))
-        ch = client.connect_capability(consumer_id="nav", provider_id="lapsing", contract_id=ODOM, transport="ros2")
+        ch = client.connect_capability(
+            consumer_id="nav", provider_id="lapsing", contract_id=ODOM, transport="ros2"
+        )
         rid = client.query(id="lapsing")[0].registration_id
         registry.heartbeat_timeout_ms = 300
 
         p = wait_for(
-            lambda: next((p for p in client.query(id="lapsing") if p.state == LifecycleState.TERMINATED), None),
+            lambda: next(
+                (p for p in client.query(id="lapsing") if p.state == LifecycleState.TERMINATED), None
+            ),
             what="TERMINATED by eviction",
         )
         assert p.state_detail == "heartbeat lapsed > 300ms"
         assert client.inspect()["channels"] == []
         assert ch.close() is False
         e = rpc_error(
-            client.connect_capability, consumer_id="nav", provider_id="lapsing", contract_id=ODOM, transport="ros2"
+            client.connect_capability,
+            consumer_id="nav",
+            provider_id="lapsing",
+            contract_id=ODOM,
+            transport="ros2",
         )
         assert e.code() == grpc.StatusCode.FAILED_PRECONDITION
 

@@ -56,14 +56,18 @@ def test_enum_parse_errors() -> None:
         Kind.parse(1.5)
 
 
-@pytest.mark.parametrize("params", [GrpcParams("f.proto", "Svc", "M"), Ros2Params("reliable"), McpParams("{}"), None])
+@pytest.mark.parametrize(
+    "params", [GrpcParams("f.proto", "Svc", "M"), Ros2Params("reliable"), McpParams("{}"), None]
+)
 def test_params_roundtrip(params) -> None:
     assert params_from_pb(params_to_pb(params)) == params
 
 
 def test_provider_roundtrip() -> None:
     cap = Capability("p", Kind.SERVICE, "c/x", Transport.MCP, McpParams("{}"), "d", True)
-    prov = CapabilityProvider("p", Kind.SERVICE, "ns", "md", 5, LifecycleState.ACTIVE, "ok", [cap], "# md", "rid")
+    prov = CapabilityProvider(
+        "p", Kind.SERVICE, "ns", "md", 5, LifecycleState.ACTIVE, "ok", [cap], "# md", "rid"
+    )
     wire = prov.to_pb().SerializeToString()
     assert CapabilityProvider.from_pb(atlas_pb2.CapabilityProvider.FromString(wire)) == prov
 

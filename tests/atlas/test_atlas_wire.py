@@ -156,4 +156,6 @@ def test_query_contract_not_found_bytes(atlas_server) -> None:
         assert one(desc, 6) == b"lifecycle/srv/Driver"
         assert one(desc, 12) == 1
         first_field = decode(desc[9][0])  # FieldSpec{name=1, type_name=2, is_primitive=3}
-        assert one(first_field, 1) == b"command" and one(first_field, 2) == b"uint8" and one(first_field, 3) == 1
+        assert (
+            one(first_field, 1) == b"command" and one(first_field, 2) == b"uint8" and one(first_field, 3) == 1
+        )
