@@ -266,6 +266,17 @@ class _Provider(TopicsMixin):
                 self._push_state(state, detail)
         log.info("re-registered %s with %d capabilities, state %s", self.id, len(self._declared), state)
 
+    def _evicted_while_alive(self) -> bool:
+        """True when the atlas marked us TERMINATED (heartbeats lapsed while we stalled) but we still run.
+
+        A heartbeat does not revive a TERMINATED record (robonix semantics), so without this check a
+        provider that was merely slow would stay invisible until the atlas garbage-collects it.
+        """
+        if self.lifecycle.state == "terminated" or self._stop.is_set():
+            return False
+        found = self.atlas.query(id=self.id)
+        return bool(found) and found[0].state == LifecycleState.TERMINATED
+
     def _heartbeat_loop(self, period_s: float) -> None:
         failing = False
         while not self._stop.wait(period_s):
@@ -274,6 +285,8 @@ class _Provider(TopicsMixin):
                 if failing:
                     log.info("atlas reachable again")
                 failing = False
+                if self._evicted_while_alive():
+                    self._reregister()
             except Exception as exc:
                 if _status_code(exc) == grpc.StatusCode.NOT_FOUND:
                     try:

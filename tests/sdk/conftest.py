@@ -69,6 +69,10 @@ class FakeAtlas:
             if id not in self.known:
                 raise FakeRpcError(grpc.StatusCode.NOT_FOUND, f"id {id!r} not registered")
 
+    def query(self, **_filters: Any) -> list[Any]:
+        """Nothing is ever evicted by the fake, so the provider's own record never reads TERMINATED."""
+        return []
+
     def forget(self) -> None:
         with self.lock:
             self.known.clear()
