@@ -1,0 +1,424 @@
+"""SlamEngine: the facade the provider drives, one ``process`` call per lidar scan.
+
+Mapping: motion-gated nodes, each matched against a running submap of the last nodes (sequential
+edge), loop closures matched against old nodes' submap, sparse optimisation, map re-rendered from the
+optimised poses. Localization: the same matcher against a fixed, loaded map; no map updates.
+Bad input never raises out of ``process``: the scan is skipped and a counter says why.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import os
+import time
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from robonix_api.geometry import compose, inverse, relative, transform_points
+from robonix_api.grid import GridMap
+
+from .lookup import LookupGrid
+from .matcher import MatchResult, match_scan, required_margin
+from .occupancy import OccupancyGrid
+from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
+from .preprocess import ScanError, prepare_scan
+from .session import SessionData, load_session, save_session
+from .types import Pose, Scan, SlamConfig, SlamStats, Update, as_pose
+
+log = logging.getLogger(__name__)
+Mode = Literal["mapping", "localization"]
+
+
+class SlamEngine:
+    def __init__(self, config: SlamConfig | None = None, mode: Mode = "mapping") -> None:
+        self.config = config or SlamConfig()
+        if mode not in ("mapping", "localization"):
+            raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
+        self._mode: Mode = mode
+        self.last_optimize: OptimizeResult | None = None
+        self.optimize_times: list[float] = []  # seconds per loop-closure optimisation (graph only)
+        self.rerender_times: list[float] = []  # seconds per map re-render after an optimisation
+        self._fixed_map: GridMap | None = None
+        self._fixed_lookup: LookupGrid | None = None
+        self.reset()
+
+    # ---------------------------------------------------------------- state
+    def reset(self) -> None:
+        """Forget the map and trajectory (a loaded localization map is kept)."""
+        c = self.config
+        self.graph = PoseGraph()
+        self._odom: list[Pose] = []
+        self._stamps: list[float] = []
+        self._path: list[float] = []
+        self._points: list[NDArray[np.float32]] = []
+        self._origins: list[NDArray[np.float64]] = []
+        self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
+        self.grid = OccupancyGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
+                                  hi=c.log_odds_max, occupied_threshold=c.occupied_threshold,
+                                  free_threshold=c.free_threshold, chunk=c.grid_chunk)
+        self.stats = SlamStats()
+        self._map_to_odom = np.zeros(3)
+        self._pose = np.zeros(3)
+        self._last_odom: Pose | None = None
+        self._last_stamp: float | None = None
+        self._initial_pose: Pose | None = None
+        self._last_match_pose: Pose | None = None  # localization gating reference
+        self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
+        self._running_built_at = 0
+        self._last_loop_node = -10**9
+        self._resume_from: int | None = None  # node to link the first new node to after a session load
+        self._map_cache: GridMap | None = None
+
+    @property
+    def mode(self) -> Mode:
+        return self._mode
+
+    def set_mode(self, mode: Mode) -> None:
+        """Switch mapping <-> localization; localization uses the loaded map or the current one."""
+        if mode not in ("mapping", "localization"):
+            raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
+        if mode == "localization" and self._fixed_lookup is None:
+            if self.graph.n_nodes == 0:
+                raise ValueError("localization needs a map: load one or map first")
+            self._set_fixed_map(self.map())
+        self._mode = mode
+        self._last_match_pose = None
+
+    def pose(self) -> Pose:
+        return self._pose.copy()
+
+    def map_to_odom(self) -> Pose:
+        return self._map_to_odom.copy()
+
+    def trajectory(self) -> NDArray[np.float64]:
+        """Current (optimised) node poses, (N, 3)."""
+        return self.graph.poses.copy()
+
+    def node_stamps(self) -> NDArray[np.float64]:
+        return np.asarray(self._stamps, dtype=float)
+
+    def map(self) -> GridMap:
+        if self._mode == "localization" and self._fixed_map is not None:
+            return self._fixed_map
+        if self._map_cache is None:
+            self._map_cache = self.grid.to_gridmap()
+        return self._map_cache
+
+    def set_initial_pose(self, pose: object) -> None:
+        """Map-frame pose of the robot at the next scan (localization start, or resuming a session)."""
+        self._initial_pose = as_pose(pose, "initial_pose")
+        self._last_match_pose = None
+
+    # ---------------------------------------------------------------- load / save
+    def load(self, grid: GridMap | None = None, session: SessionData | str | os.PathLike[str] | None = None,
+             *, mode: Mode | None = None, initial_pose: object | None = None) -> None:
+        """Load a map and/or a saved session. Default mode: mapping if a session is given, else localization."""
+        if isinstance(session, str | os.PathLike):
+            session = load_session(session)
+        if grid is None and session is None:
+            raise ValueError("load() needs a grid, a session, or both")
+        mode = mode or ("mapping" if session is not None else "localization")
+        if mode not in ("mapping", "localization"):
+            raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
+        if grid is not None and abs(grid.origin_yaw) > 1e-9:
+            raise ValueError("GridMap.origin_yaw must be 0 for SLAM localization")
+        self.reset()
+        self._fixed_map = self._fixed_lookup = None
+        if session is not None:
+            self.graph = session.graph
+            self._odom = [np.asarray(o, dtype=float) for o in session.odom]
+            self._stamps = [float(s) for s in session.stamps]
+            self._path = [float(d) for d in session.path_dist]
+            self._points = list(session.points)
+            self._origins = [np.asarray(o, dtype=float) for o in session.origins]
+            self._rerender()
+            if self.graph.n_nodes:
+                self._resume_from = self.graph.n_nodes - 1
+                self._pose = self.graph.poses[-1].copy()
+        if grid is not None:
+            self._set_fixed_map(grid)
+        elif mode == "localization":
+            self._set_fixed_map(self.map())
+        self._mode = mode
+        if initial_pose is not None:
+            self.set_initial_pose(initial_pose)
+        elif self.graph.n_nodes:
+            self.set_initial_pose(self.graph.poses[-1])
+
+    def session(self) -> SessionData:
+        return SessionData(self.graph, np.asarray(self._odom).reshape(-1, 3), np.asarray(self._stamps, dtype=float),
+                           np.asarray(self._path, dtype=float), list(self._points),
+                           np.asarray(self._origins).reshape(-1, 2), self.config)
+
+    def save_session(self, path: str | os.PathLike[str]) -> Path:
+        return save_session(self.session(), path)
+
+    def _set_fixed_map(self, grid: GridMap) -> None:
+        c = self.config
+        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy), max(c.coarse_factor, c.loop_coarse_factor),
+                            c.smear_sigma, grid.resolution)
+        pad = int(math.ceil(m / grid.resolution))
+        mask = np.pad(grid.data >= 65, pad)
+        self._fixed_lookup = LookupGrid.from_mask(mask, grid.resolution, grid.origin_x - pad * grid.resolution,
+                                                  grid.origin_y - pad * grid.resolution, c.smear_sigma)
+        # refinement points: occupied cells that touch free space (wall surfaces). Interior cells of thick
+        # walls would pull the fitted lines into the wall by up to half its thickness.
+        occ = grid.data >= 65
+        free = (grid.data >= 0) & (grid.data < 65)
+        touch = ndimage.binary_dilation(free, np.ones((3, 3), dtype=bool))
+        r, col = np.nonzero(occ & touch)
+        self._fixed_lookup.points = np.stack(grid.cell_to_world(col, r), axis=1)
+        self._fixed_map = grid
+
+    # ---------------------------------------------------------------- processing
+    def _skip(self, reason: str, counter: str) -> Update:
+        setattr(self.stats, counter, getattr(self.stats, counter) + 1)
+        self.stats.last_warning = reason
+        log.warning("slam: skipped scan: %s (%s=%d)", reason, counter, getattr(self.stats, counter))
+        return self._update(False, False, skipped=reason)
+
+    def _update(self, integrated: bool, changed: bool, *, response: float = float("nan"), loop: bool = False,
+                skipped: str = "") -> Update:
+        return Update(self._pose.copy(), self._map_to_odom.copy(), changed, integrated, response, loop, skipped,
+                      dataclasses.replace(self.stats))
+
+    def process(self, scan: Scan, odom_pose: object, stamp: float | None = None) -> Update:
+        """Integrate one scan taken at odometry pose ``odom_pose`` (odom frame). Never raises on bad input."""
+        c = self.config
+        self.stats.scans_received += 1
+        try:
+            odom = as_pose(odom_pose, "odom_pose")
+        except ValueError as exc:
+            return self._skip(str(exc), "scans_skipped_invalid")
+        if not isinstance(scan, Scan):
+            return self._skip(f"expected a Scan, got {type(scan).__name__}", "scans_skipped_invalid")
+        t = float(scan.stamp if stamp is None else stamp)
+        if not math.isfinite(t):
+            return self._skip(f"stamp is not finite: {t}", "scans_skipped_invalid")
+        if self._last_stamp is not None and t < self._last_stamp:
+            return self._skip(f"stamp {t} older than previous {self._last_stamp}", "scans_skipped_time")
+        try:
+            prep = prepare_scan(scan, c.max_range)
+        except ScanError as exc:
+            return self._skip(str(exc), "scans_skipped_invalid")
+        self.stats.beams_nan += prep.n_nan
+        self.stats.beams_inf += prep.n_inf
+        self.stats.beams_out_of_range += prep.n_out_of_range
+        if len(prep.points) < c.min_valid_beams:
+            return self._skip(f"only {len(prep.points)} usable beams of {scan.ranges.size}", "scans_skipped_invalid")
+        self._last_stamp = t
+
+        if self._initial_pose is not None:  # (re)start: anchor map->odom so the robot is at the given pose
+            self._map_to_odom = compose(self._initial_pose, inverse(odom))
+            self._initial_pose = None
+        elif self._last_odom is not None:
+            d = relative(self._last_odom, odom)
+            if math.hypot(d[0], d[1]) > c.max_odom_jump_distance or abs(d[2]) > c.max_odom_jump_heading:
+                # keep the map pose; re-anchor odometry so the jump does not teleport the robot
+                self._map_to_odom = compose(self._pose, inverse(odom))
+                self._last_odom = odom
+                return self._skip(f"odometry jump of {math.hypot(d[0], d[1]):.2f} m / {d[2]:.2f} rad", "odom_jumps")
+        self._last_odom = odom
+        predicted = compose(self._map_to_odom, odom)
+        self._pose = predicted
+        if self._mode == "localization":
+            return self._localize(prep.points, predicted, odom)
+        return self._map_step(prep.points, prep.origin, predicted, odom, t)
+
+    def _moved(self, ref: Pose, pose: Pose) -> bool:
+        d = relative(ref, pose)
+        return math.hypot(d[0], d[1]) >= self.config.min_travel_distance or abs(d[2]) >= self.config.min_travel_heading
+
+    def _match(self, lookup: LookupGrid, points: NDArray, seed: Pose, loop: bool = False) -> MatchResult:
+        c = self.config
+        return match_scan(lookup, points, seed,
+                          window_xy=c.loop_search_window_xy if loop else c.search_window_xy,
+                          window_theta=c.loop_search_window_theta if loop else c.search_window_theta,
+                          angular_step=c.angular_step, coarse_factor=c.loop_coarse_factor if loop else c.coarse_factor,
+                          refine=c.refine, sigma=c.smear_sigma, penalty=0.0 if loop else c.match_penalty)
+
+    def _localize(self, points: NDArray, predicted: Pose, odom: Pose) -> Update:
+        if self._fixed_lookup is None:
+            return self._skip("localization mode without a map", "scans_skipped_invalid")
+        if self._last_match_pose is not None and not self._moved(self._last_match_pose, predicted):
+            self.stats.scans_gated += 1
+            return self._update(False, False)
+        m = self._match(self._fixed_lookup, points, predicted)
+        self._last_match_pose = predicted
+        if m.response < self.config.min_response:
+            self.stats.match_failures += 1
+            return self._update(False, False, response=m.response)
+        self._pose = m.pose
+        self._map_to_odom = compose(m.pose, inverse(odom))
+        self._last_match_pose = m.pose
+        self.stats.scans_integrated += 1
+        return self._update(True, False, response=m.response)
+
+    def _map_step(self, points: NDArray, origin: NDArray, predicted: Pose, odom: Pose, t: float) -> Update:
+        c = self.config
+        n = self.graph.n_nodes
+        prev = self._resume_from if self._resume_from is not None else n - 1
+        if n and self._resume_from is None and not self._moved(self.graph.poses[-1], predicted):
+            self.stats.scans_gated += 1
+            return self._update(False, False)
+        response = float("nan")
+        if n == 0:
+            pose, cov, kind = predicted, None, EDGE_ODOM
+        else:
+            if (self._running is None or self._resume_from is not None
+                    or n - self._running_built_at >= c.lookup_rebuild_nodes):
+                self._running = self._build_running(predicted, points)
+                self._running_built_at = n
+            m = self._match(self._running, points, predicted)
+            response = m.response
+            if m.response >= c.min_response:
+                pose, cov, kind = m.pose, m.covariance, EDGE_SEQUENTIAL
+            else:
+                self.stats.match_failures += 1
+                pose, cov, kind = predicted, None, EDGE_ODOM
+        k = self.graph.add_node(pose)
+        if n:
+            ref = self.graph.poses[prev]
+            z = relative(ref, pose)
+            if cov is None:
+                info = np.diag([1 / c.odom_sigma_xy**2, 1 / c.odom_sigma_xy**2, 1 / c.odom_sigma_theta**2])
+            else:
+                info = _info_in_frame(cov, ref[2])
+            self.graph.add_edge(prev, k, z, info, kind)
+        dist = 0.0 if n == 0 else float(np.hypot(*(pose[:2] - self.graph.poses[prev][:2])))
+        self._path.append((self._path[prev] if n else 0.0) + dist)
+        self._odom.append(odom)
+        self._stamps.append(t)
+        self._points.append(np.asarray(points, dtype=np.float32))
+        self._origins.append(np.asarray(origin, dtype=float))
+        self._resume_from = None
+        self._render_node(k, pose)
+        self._pose = pose.copy()
+        self._map_to_odom = compose(pose, inverse(odom))
+        loop = False
+        if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
+            loop = self._try_loop_closure(k)
+        self.stats.scans_integrated += 1
+        return self._update(True, True, response=response, loop=loop)
+
+    def _node_points_map(self, nodes: NDArray | list[int]) -> NDArray:
+        poses = self.graph.poses
+        parts = [transform_points(poses[i], self._points[i]) for i in nodes]
+        return np.concatenate(parts) if parts else np.zeros((0, 2))
+
+    def _build_running(self, center: Pose, points: NDArray) -> LookupGrid:
+        """Lookup over the last nodes' scans, cropped to where the current scan can land (EDT cost)."""
+        c = self.config
+        n = self.graph.n_nodes
+        if self._resume_from is not None:  # after a session load: nearest nodes in space, not in the chain
+            d = np.hypot(*(self.graph.poses[:, :2] - center[:2]).T)
+            nodes = np.argsort(d)[:c.running_buffer_size]
+        else:
+            nodes = range(max(0, n - c.running_buffer_size), n)
+        margin = required_margin(c.search_window_xy, c.coarse_factor, c.smear_sigma, c.resolution)
+        cur = transform_points(center, points)
+        lo, hi = cur.min(axis=0), cur.max(axis=0)
+        # reused for lookup_rebuild_nodes nodes: leave room for the robot to move meanwhile
+        reach = float(np.max(np.hypot(*(cur - center[:2]).T))) * c.search_window_theta
+        reach += c.lookup_rebuild_nodes * max(c.min_travel_distance, 0.1)
+        return LookupGrid.from_points(self._node_points_map(nodes), c.resolution, c.smear_sigma, margin,
+                                      center=0.5 * (lo + hi),
+                                      half_extent=float(np.max(hi - lo)) / 2 + c.search_window_xy + reach + 0.2)
+
+    def _try_loop_closure(self, k: int) -> bool:
+        c = self.config
+        poses = self.graph.poses
+        path = np.asarray(self._path)
+        old = np.flatnonzero(path[k] - path[:k] >= c.loop_min_chain_distance)
+        if len(old) == 0:
+            return False
+        d = np.hypot(*(poses[old, :2] - poses[k, :2]).T)
+        near = old[d <= c.loop_search_radius]
+        if len(near) == 0:
+            return False
+        cand = int(near[np.argmin(d[d <= c.loop_search_radius])])
+        sub = old[np.hypot(*(poses[old, :2] - poses[cand, :2]).T) <= c.loop_submap_radius]
+        margin = required_margin(c.loop_search_window_xy, c.loop_coarse_factor, c.smear_sigma, c.resolution)
+        lookup = LookupGrid.from_points(self._node_points_map(sub), c.resolution, c.smear_sigma, margin,
+                                        center=poses[k], half_extent=c.max_range + c.loop_search_window_xy + 0.5)
+        m = self._match(lookup, self._points[k], poses[k], loop=True)
+        corr = float(np.hypot(*(m.pose[:2] - poses[k, :2])))
+        limit = c.loop_max_correction + c.loop_max_correction_ratio * (path[k] - path[cand])
+        at_edge = (abs(m.pose[0] - poses[k, 0]) > c.loop_search_window_xy - c.resolution
+                   or abs(m.pose[1] - poses[k, 1]) > c.loop_search_window_xy - c.resolution
+                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi)) > c.loop_search_window_theta - c.angular_step)
+        if m.response < c.loop_min_response or corr > limit or at_edge:
+            self.stats.loop_rejected += 1
+            return False
+        self.graph.add_edge(cand, k, relative(poses[cand], m.pose), _info_in_frame(m.covariance, poses[cand][2]),
+                            EDGE_LOOP)
+        self.stats.loop_closures += 1
+        self._last_loop_node = k
+        self._optimize()
+        return True
+
+    def _optimize(self) -> None:
+        t0 = time.perf_counter()
+        res = self.graph.optimize(self.config.optimizer_iterations)
+        self.optimize_times.append(time.perf_counter() - t0)
+        self.last_optimize = res
+        self.stats.optimizations += 1
+        k = self.graph.n_nodes - 1
+        self._pose = self.graph.poses[k].copy()
+        self._map_to_odom = compose(self._pose, inverse(self._odom[k]))
+        t1 = time.perf_counter()
+        if self._rerender(moved_only=True):
+            self.rerender_times.append(time.perf_counter() - t1)
+        self._running = None
+
+    def optimize(self) -> OptimizeResult | None:
+        """Run a full optimisation now (e.g. before saving); returns None without a graph."""
+        if self.graph.n_edges == 0:
+            return None
+        self._optimize()
+        return self.last_optimize
+
+    def _render_node(self, k: int, pose: NDArray) -> None:
+        org, pts = self._origins[k], self._points[k]
+        if k < len(self._rendered):
+            old = self._rendered[k]
+            self.grid.integrate(transform_points(old, org[None])[0], transform_points(old, pts), weight=-1.0)
+            self._rendered[k] = pose.copy()
+        else:
+            self._rendered.append(pose.copy())
+        self.grid.integrate(transform_points(pose, org[None])[0], transform_points(pose, pts))
+        self._map_cache = None
+
+    def _rerender(self, moved_only: bool = False) -> int:
+        """Re-render nodes from their (optimised) poses: all of them, or only those that moved more than
+        ``re_render_threshold`` (their old contribution is subtracted first). Returns how many."""
+        if not moved_only:
+            self.grid.clear()
+            self._rendered = []
+            for k, pose in enumerate(self.graph.poses):
+                self._render_node(k, pose)
+            return self.graph.n_nodes
+        if not self._rendered:
+            return 0
+        old = np.asarray(self._rendered)
+        new = self.graph.poses[:len(old)]
+        dth = np.abs(np.remainder(new[:, 2] - old[:, 2] + math.pi, 2 * math.pi) - math.pi)
+        thr = self.config.re_render_threshold
+        moved = np.flatnonzero((np.hypot(*(new[:, :2] - old[:, :2]).T) > thr) | (dth * self.config.max_range > thr))
+        for k in moved:
+            self._render_node(int(k), self.graph.poses[k])
+        return len(moved)
+
+
+def _info_in_frame(cov_map: NDArray, theta: float) -> NDArray:
+    """Map-frame covariance -> information matrix in the frame of a node with heading ``theta``."""
+    cs, sn = math.cos(theta), math.sin(theta)
+    r = np.array([[cs, sn, 0.0], [-sn, cs, 0.0], [0.0, 0.0, 1.0]])
+    cov = r @ cov_map @ r.T
+    return np.linalg.inv(0.5 * (cov + cov.T))

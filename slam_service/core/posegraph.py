@@ -1,0 +1,170 @@
+"""SE(2) pose graph and a sparse Levenberg-Marquardt optimiser (in the spirit of Konolige's SPA).
+
+Edges carry a relative-pose measurement z_ij (pose of j in frame i) and a 3x3 information matrix.
+All Jacobians are computed for every edge at once and assembled into a scipy.sparse normal matrix;
+node 0 is anchored (its block is removed), which fixes the gauge so the map frame stays put.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+EDGE_ODOM, EDGE_SEQUENTIAL, EDGE_LOOP = 0, 1, 2
+
+
+@dataclass
+class OptimizeResult:
+    iterations: int
+    initial_cost: float
+    final_cost: float
+    max_change: float  # largest node translation (m)
+
+
+@dataclass
+class PoseGraph:
+    poses: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    edge_ij: list[tuple[int, int]] = field(default_factory=list)
+    edge_z: list[NDArray[np.float64]] = field(default_factory=list)
+    edge_info: list[NDArray[np.float64]] = field(default_factory=list)
+    edge_kind: list[int] = field(default_factory=list)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.poses)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edge_ij)
+
+    def add_node(self, pose: NDArray) -> int:
+        self.poses = np.vstack([self.poses, np.asarray(pose, dtype=float).reshape(1, 3)])
+        return self.n_nodes - 1
+
+    def add_edge(self, i: int, j: int, z: NDArray, info: NDArray, kind: int = EDGE_SEQUENTIAL) -> None:
+        if not (0 <= i < self.n_nodes and 0 <= j < self.n_nodes) or i == j:
+            raise ValueError(f"edge ({i}, {j}) refers to missing nodes (have {self.n_nodes})")
+        info = np.asarray(info, dtype=float).reshape(3, 3)
+        if not np.all(np.isfinite(info)) or np.any(np.linalg.eigvalsh(0.5 * (info + info.T)) <= 0):
+            raise ValueError(f"edge ({i}, {j}): information matrix must be symmetric positive definite")
+        self.edge_ij.append((int(i), int(j)))
+        self.edge_z.append(np.asarray(z, dtype=float).reshape(3).copy())
+        self.edge_info.append(0.5 * (info + info.T))
+        self.edge_kind.append(int(kind))
+
+    def _arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        ij = np.asarray(self.edge_ij, dtype=np.int64).reshape(-1, 2)
+        return ij[:, 0], ij[:, 1], np.asarray(self.edge_z).reshape(-1, 3), np.asarray(self.edge_info).reshape(-1, 3, 3)
+
+    def residuals(self, poses: NDArray | None = None) -> NDArray[np.float64]:
+        """e_ij = z_ij^-1 (x_i^-1 x_j) as (dx, dy, dtheta), one row per edge."""
+        x = self.poses if poses is None else poses
+        i, j, z, _ = self._arrays()
+        return _errors(x, i, j, z)[0]
+
+    def cost(self, poses: NDArray | None = None) -> float:
+        _, _, _, info = self._arrays()
+        e = self.residuals(poses)
+        return float(np.einsum("ei,eij,ej->", e, info, e))
+
+    def optimize(self, iterations: int = 15, tol: float = 1e-6) -> OptimizeResult:
+        """Levenberg-Marquardt on all nodes but node 0; updates ``poses`` in place."""
+        n = self.n_nodes
+        if n < 2 or self.n_edges == 0:
+            c = self.cost() if self.n_edges else 0.0
+            return OptimizeResult(0, c, c, 0.0)
+        i, j, z, info = self._arrays()
+        x = self.poses.copy()
+        start = x.copy()
+        e, a, b = _errors(x, i, j, z, jacobians=True)
+        cost0 = cost = float(np.einsum("ei,eij,ej->", e, info, e))
+        lam = 1e-4
+        done_iters = 0
+        for step_no in range(1, iterations + 1):
+            done_iters = step_no
+            h, g = _normal_equations(n, i, j, e, a, b, info)
+            h = h[3:, 3:]
+            g = g[3:]
+            diag = h.diagonal()
+            improved = False
+            for _ in range(8):
+                hl = h + sp.diags(lam * (diag + 1e-9), format="csc")
+                dx = spla.spsolve(hl, -g)
+                if not np.all(np.isfinite(dx)):
+                    lam *= 10
+                    continue
+                xn = x.copy()
+                xn[1:] += dx.reshape(-1, 3)
+                xn[:, 2] = np.remainder(xn[:, 2] + math.pi, 2 * math.pi) - math.pi
+                en = _errors(xn, i, j, z)[0]
+                cn = float(np.einsum("ei,eij,ej->", en, info, en))
+                if cn <= cost:
+                    x, lam, improved = xn, max(lam / 10, 1e-9), True
+                    done = (cost - cn) <= tol * max(cost, 1e-12) or np.abs(dx).max() < 1e-7
+                    cost = cn
+                    break
+                lam *= 10
+            if not improved:
+                break
+            e, a, b = _errors(x, i, j, z, jacobians=True)
+            if done:
+                break
+        self.poses = x
+        change = float(np.hypot(*(x[:, :2] - start[:, :2]).T).max())
+        return OptimizeResult(done_iters, cost0, cost, change)
+
+
+def _errors(x: NDArray, i: NDArray, j: NDArray, z: NDArray, jacobians: bool = False
+            ) -> tuple[NDArray, NDArray | None, NDArray | None]:
+    xi, xj = x[i], x[j]
+    ci, si = np.cos(xi[:, 2]), np.sin(xi[:, 2])
+    cz, sz = np.cos(z[:, 2]), np.sin(z[:, 2])
+    dtx, dty = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
+    # d = R_i^T (t_j - t_i); e_t = R_z^T (d - t_z)
+    dx = ci * dtx + si * dty
+    dy = -si * dtx + ci * dty
+    ux, uy = dx - z[:, 0], dy - z[:, 1]
+    e = np.empty((len(i), 3))
+    e[:, 0] = cz * ux + sz * uy
+    e[:, 1] = -sz * ux + cz * uy
+    e[:, 2] = np.remainder(xj[:, 2] - xi[:, 2] - z[:, 2] + math.pi, 2 * math.pi) - math.pi
+    if not jacobians:
+        return e, None, None
+    # R_z^T R_i^T, and R_z^T dR_i^T/dtheta (t_j - t_i)
+    rzt = np.stack([np.stack([cz, sz], -1), np.stack([-sz, cz], -1)], axis=1)  # (E, 2, 2)
+    rit = np.stack([np.stack([ci, si], -1), np.stack([-si, ci], -1)], axis=1)
+    m = rzt @ rit
+    dth = np.stack([-si * dtx + ci * dty, -ci * dtx - si * dty], axis=-1)  # dR_i^T/dtheta (t_j - t_i)
+    dth = np.einsum("eab,eb->ea", rzt, dth)
+    a = np.zeros((len(i), 3, 3))
+    b = np.zeros((len(i), 3, 3))
+    a[:, :2, :2] = -m
+    a[:, :2, 2] = dth
+    a[:, 2, 2] = -1.0
+    b[:, :2, :2] = m
+    b[:, 2, 2] = 1.0
+    return e, a, b
+
+
+def _normal_equations(n: int, i: NDArray, j: NDArray, e: NDArray, a: NDArray, b: NDArray, info: NDArray
+                      ) -> tuple[sp.csc_matrix, NDArray]:
+    at_o = np.einsum("eki,ekl->eil", a, info)  # A^T Omega
+    bt_o = np.einsum("eki,ekl->eil", b, info)
+    blocks = [(i, i, at_o @ a), (i, j, at_o @ b), (j, i, bt_o @ a), (j, j, bt_o @ b)]
+    rows, cols, vals = [], [], []
+    rr, cc = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
+    for bi, bj, blk in blocks:
+        rows.append((3 * bi[:, None, None] + rr[None]).ravel())
+        cols.append((3 * bj[:, None, None] + cc[None]).ravel())
+        vals.append(blk.ravel())
+    h = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(3 * n, 3 * n)).tocsc()
+    g = np.zeros(3 * n)
+    np.add.at(g, (3 * i[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", at_o, e).ravel())
+    np.add.at(g, (3 * j[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", bt_o, e).ravel())
+    return h, g

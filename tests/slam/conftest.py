@@ -1,0 +1,57 @@
+"""Shared, deterministic SLAM fixtures: the apartment drive is recorded once per test session."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from slam_service.core import SlamConfig, SlamEngine
+from slam_service.core.synthetic import OdomNoise, Recording, World, apartment_world, drive
+
+DRIFT = OdomNoise(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
+
+
+def two_lap_apartment() -> World:
+    """The apartment ring driven twice (then into the second room again): a loop worth closing."""
+    base = apartment_world()
+    ring = base.waypoints[:-3]
+    return World(base.name, base.rects, ring * 2 + base.waypoints[-3:])
+
+
+@dataclass
+class MappingRun:
+    world: World
+    rec: Recording
+    engine: SlamEngine
+    node_index: list[int]  # recording index of each pose-graph node
+
+    @property
+    def ate_inputs(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.engine.trajectory(), self.rec.gt[self.node_index]
+
+
+def run_mapping(world: World, rec: Recording, config: SlamConfig) -> MappingRun:
+    eng = SlamEngine(config)
+    idx = []
+    for k, (scan, odom) in enumerate(zip(rec.scans, rec.odom, strict=True)):
+        if eng.process(scan, odom).integrated:
+            idx.append(k)
+    return MappingRun(world, rec, eng, idx)
+
+
+@pytest.fixture(scope="session")
+def apartment_recording() -> tuple[World, Recording]:
+    world = two_lap_apartment()
+    return world, drive(world, range_noise=0.03, dropout=0.05, odom_noise=DRIFT, seed=1)
+
+
+@pytest.fixture(scope="session")
+def mapping_with_lc(apartment_recording: tuple[World, Recording]) -> MappingRun:
+    return run_mapping(*apartment_recording, SlamConfig(loop_closure=True))
+
+
+@pytest.fixture(scope="session")
+def mapping_without_lc(apartment_recording: tuple[World, Recording]) -> MappingRun:
+    return run_mapping(*apartment_recording, SlamConfig(loop_closure=False))

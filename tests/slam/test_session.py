@@ -1,0 +1,112 @@
+"""Serialized sessions: round trip, continue mapping, atomic writes, and clear errors on bad files."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from slam_service.core import SessionFileError, SessionSaveError, SlamEngine, ate_rmse, load_session
+from slam_service.core import session as session_mod
+from slam_service.core.synthetic import apartment_world, drive
+
+from .conftest import DRIFT, MappingRun
+
+
+def test_round_trip_and_continue_mapping(mapping_with_lc: MappingRun, tmp_path: Path) -> None:
+    src = mapping_with_lc.engine
+    path = src.save_session(tmp_path / "apt.npz")
+    data = load_session(path)
+    assert np.allclose(data.graph.poses, src.graph.poses)
+    assert data.graph.edge_ij == src.graph.edge_ij
+    assert data.config == src.config
+    eng = SlamEngine()
+    eng.load(session=path, initial_pose=[1.5, 1.5, src.trajectory()[0][2]])
+    assert eng.mode == "mapping"
+    # re-rendered from the saved scans at the optimised poses (the live map re-renders only nodes that
+    # moved more than re_render_threshold, so a few cells may differ)
+    a, b = eng.map(), src.map()
+    assert a.data.shape == b.data.shape and (a.origin_x, a.origin_y) == (b.origin_x, b.origin_y)
+    known = (a.data >= 0) | (b.data >= 0)
+    assert np.mean(a.data[known] == b.data[known]) > 0.99
+    rec = drive(apartment_world(), range_noise=0.02, odom_noise=DRIFT, seed=11)
+    n0 = eng.graph.n_nodes
+    idx = [k for k, (s, o) in enumerate(zip(rec.scans[:250], rec.odom[:250], strict=True))
+           if eng.process(s, o).integrated]
+    assert eng.graph.n_nodes == n0 + len(idx) > n0
+    assert ate_rmse(eng.trajectory()[n0:], rec.gt[idx]) < 0.05  # the new run lands in the old map frame
+
+
+def test_bad_files_raise_clear_errors(tmp_path: Path) -> None:
+    with pytest.raises(SessionFileError, match="no such file"):
+        load_session(tmp_path / "missing.npz")
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"this is not a zip archive")
+    with pytest.raises(SessionFileError, match="not a SLAM session"):
+        load_session(junk)
+    other = tmp_path / "other.npz"
+    np.savez(other, a=np.zeros(3))
+    with pytest.raises(SessionFileError, match="format tag"):
+        load_session(other)
+    eng = SlamEngine()
+    with pytest.raises(SessionFileError):
+        eng.load(session=junk)
+
+
+def _saved(tmp_path: Path) -> Path:
+    rec = drive(apartment_world(), seed=2)
+    eng = SlamEngine()
+    for s, o in zip(rec.scans[:60], rec.odom[:60], strict=True):
+        eng.process(s, o)
+    return eng.save_session(tmp_path / "s.npz")
+
+
+def test_wrong_version_and_corrupt_arrays(tmp_path: Path) -> None:
+    path = _saved(tmp_path)
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    bad = dict(arrays, version=np.array(99))
+    np.savez(tmp_path / "v.npz", **bad)
+    with pytest.raises(SessionFileError, match="unsupported session version 99"):
+        load_session(tmp_path / "v.npz")
+    bad = dict(arrays, odom=arrays["odom"][:-1])
+    np.savez(tmp_path / "o.npz", **bad)
+    with pytest.raises(SessionFileError, match="'odom' has shape"):
+        load_session(tmp_path / "o.npz")
+    bad = {k: v for k, v in arrays.items() if k != "edge_info"}
+    np.savez(tmp_path / "e.npz", **bad)
+    with pytest.raises(SessionFileError, match="missing array 'edge_info'"):
+        load_session(tmp_path / "e.npz")
+    truncated = tmp_path / "t.npz"
+    truncated.write_bytes(path.read_bytes()[:200])
+    with pytest.raises(SessionFileError):
+        load_session(truncated)
+
+
+def test_unwritable_path_raises_and_keeps_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = _saved(tmp_path)
+    original = path.read_bytes()
+    eng = SlamEngine()
+    with pytest.raises(SessionSaveError, match="cannot write"):
+        eng.save_session(tmp_path / "no" / "such" / "dir" / "s.npz")
+    if os.geteuid() != 0:  # root ignores directory permissions
+        ro = tmp_path / "ro"
+        ro.mkdir()
+        ro.chmod(0o500)
+        try:
+            with pytest.raises(SessionSaveError):
+                eng.save_session(ro / "s.npz")
+        finally:
+            ro.chmod(0o700)
+
+    # a crash at the rename step: the old session is intact and no temp file is left behind
+    def boom(src: str, dst: str) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(session_mod.os, "replace", boom)
+    with pytest.raises(SessionSaveError, match="No space left"):
+        eng.save_session(path)
+    assert path.read_bytes() == original
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
