@@ -1,0 +1,1 @@
+"""In-process evaluation: the sim, SLAM and navigation cores stepped together, deterministically."""
