@@ -1,0 +1,135 @@
+"""The CMD_INIT config of the navigation provider (robonix nav2_wrapper_rbnx keys plus ours).
+
+Validated with pydantic so that every error names the field at fault (``dynamic_speed.min_percentage:
+...``); unknown keys are errors too, because a misspelt key silently ignored is a deploy bug.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
+
+
+class BridgeConfigError(ValueError):
+    """The config dict is unusable; the message starts with the field path."""
+
+
+class _M(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+def _topic(v: str) -> str:
+    name = v.strip()
+    if not name:
+        return ""
+    if " " in name or not name.lstrip("/"):
+        raise ValueError(f"invalid topic name {v!r}")
+    return name if name.startswith("/") else "/" + name
+
+
+class TopicRemap(_M):
+    """Per-role topic overrides; a remapped role is not looked up on the atlas."""
+
+    map: str = ""
+    odom: str = ""
+    scan: str = ""
+    scan_cloud: str = ""  # robonix key; accepted, but there is no 3-D source in this core (warned)
+
+    @field_validator("map", "odom", "scan", "scan_cloud")
+    @classmethod
+    def _check(cls, v: str) -> str:
+        return _topic(v)
+
+
+class ProviderIds(_M):
+    """Pin the atlas provider per role (when several offer the same contract)."""
+
+    map: str = ""
+    odom: str = ""
+    scan: str = ""
+    twist_in: str = ""
+
+
+class DynamicSpeed(_M):
+    max_linear_speed_mps: float | None = Field(None, gt=0)  # None: the controller's max_vel_x
+    default_percentage: float = Field(100.0, gt=0, le=100)
+    step_percentage: float = Field(10.0, gt=0, le=100)
+    min_percentage: float = Field(10.0, gt=0, le=100)
+
+    @model_validator(mode="after")
+    def _order(self) -> DynamicSpeed:
+        if self.min_percentage > self.default_percentage:
+            raise ValueError(f"min_percentage ({self.min_percentage:g}) must not exceed default_percentage "
+                             f"({self.default_percentage:g})")
+        return self
+
+
+class Frames(_M):
+    map: str = "map"
+    odom: str = "odom"
+    base: str = "base_link"
+
+    @field_validator("map", "odom", "base")
+    @classmethod
+    def _frame(cls, v: str) -> str:
+        f = v.strip().lstrip("/")
+        if not f or " " in f:
+            raise ValueError(f"invalid frame name {v!r}")
+        return f
+
+
+class BridgeConfig(_M):
+    params_profile: Literal["sim", "slam", "default"] = "sim"
+    params_file: str = ""               # absolute or package-relative; overrides params_profile
+    use_sim_time: bool = True
+    action_wait_s: float = Field(90.0, gt=0)   # how long CMD_INIT waits for the first map + odom + TF
+    topic_remap: TopicRemap = TopicRemap()
+    provider_ids: ProviderIds = ProviderIds()
+    velocity_output_topic: str = ""     # empty: chassis twist_in from the atlas, else /cmd_vel
+    dynamic_speed: DynamicSpeed = DynamicSpeed()
+    robot_description: str = "config/panda_mobile.yaml"
+    frames: Frames = Frames()
+    data_timeout_s: float = Field(1.0, gt=0)   # sim s without odom / fresh TF before a run fails
+    clock_stall_s: float = Field(0.5, gt=0)    # wall s without /clock advancing before the robot is stopped
+    clock_timeout_s: float = Field(10.0, gt=0)  # wall s of a stalled /clock before a run fails
+
+    @field_validator("velocity_output_topic")
+    @classmethod
+    def _vel_topic(cls, v: str) -> str:
+        return _topic(v)
+
+    @field_validator("action_wait_s", "data_timeout_s", "clock_stall_s", "clock_timeout_s")
+    @classmethod
+    def _finite(cls, v: float) -> float:
+        if not math.isfinite(v):
+            raise ValueError("must be a finite number of seconds")
+        return v
+
+    def resolve_path(self, value: str) -> Path:
+        """Absolute as given; relative to the package root otherwise (robonix convention)."""
+        p = Path(value).expanduser()
+        return p if p.is_absolute() else PKG_ROOT / p
+
+    @property
+    def params_source(self) -> str | Path:
+        return self.resolve_path(self.params_file) if self.params_file.strip() else self.params_profile
+
+
+def parse_config(cfg: dict[str, Any] | None) -> BridgeConfig:
+    """Validate the CMD_INIT dict; BridgeConfigError lists each bad field as ``path: message``."""
+    try:
+        return BridgeConfig.model_validate(cfg or {})
+    except ValidationError as exc:
+        parts = []
+        for err in exc.errors():
+            loc = ".".join(str(p) for p in err["loc"]) or "config"
+            msg = err["msg"].removeprefix("Value error, ")
+            if err["type"] == "extra_forbidden":
+                msg = "unknown key (misspelt?)"
+            parts.append(f"{loc}: {msg}")
+        raise BridgeConfigError("; ".join(parts)) from None

@@ -1,0 +1,139 @@
+"""The navigation provider's DDS inputs: latest map, odometry and scan, the TF buffer and the (sim) clock.
+
+Callbacks only store the newest sample (with a sequence number, so the loop feeds the costmaps each
+new map or scan once) and the clock time it arrived; every decision is made by the loop thread.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from nav2_wrapper.core import LaserScan as CoreScan
+from robonix_api.dds import LaserScan, OccupancyGrid, Odometry, SimClock, TfBuffer, TfError
+from robonix_api.dds.convert import msg_to_grid
+from robonix_api.geometry import compose
+from robonix_api.grid import GridMap
+
+from .bridge_config import Frames
+from .bridge_upstream import Binding
+
+log = logging.getLogger("nav2_wrapper.inputs")
+Pose = tuple[float, float, float]
+
+
+@dataclass
+class RobotState:
+    pose: Pose                  # base in the map frame
+    vel: Pose                   # body-frame twist from odometry
+    tf_age: float               # s (clock time) since the older of map→odom, odom→base
+
+
+class Inputs:
+    def __init__(self, node: Any, bindings: dict[str, Binding], frames: Frames, use_sim_time: bool) -> None:
+        self.frames, self.bindings = frames, bindings
+        self.clock = SimClock(node, use_sim_time)
+        self.tf = TfBuffer(node)
+        self._lock = threading.Lock()
+        self.grid: GridMap | None = None
+        self.grid_seq = 0
+        self.odom_vel: Pose = (0.0, 0.0, 0.0)
+        self.odom_t: float | None = None   # clock time of the last odometry
+        self.scan: LaserScan | None = None
+        self.scan_seq = 0
+        self._warned_frame = False
+        self._subs = [node.create_subscription(bindings["map"].topic, OccupancyGrid, self._on_map, bindings["map"].qos),
+                      node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom,
+                                               bindings["odom"].qos)]
+        if "scan" in bindings:
+            self._subs.append(node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan,
+                                                       bindings["scan"].qos))
+
+    # ---- callbacks (DDS dispatch thread) -----------------------------------------------------------
+    def _on_map(self, msg: OccupancyGrid) -> None:
+        try:
+            grid = msg_to_grid(msg)
+        except ValueError as exc:
+            log.warning("dropping a malformed map on %s: %s", self.bindings["map"].topic, exc)
+            return
+        if grid.frame_id.lstrip("/") != self.frames.map and not self._warned_frame:
+            self._warned_frame = True
+            log.warning("map on %s is in frame %r, expected %r: treated as %r", self.bindings["map"].topic,
+                        grid.frame_id, self.frames.map, self.frames.map)
+        with self._lock:
+            self.grid, self.grid_seq = grid, self.grid_seq + 1
+
+    def _on_odom(self, msg: Odometry) -> None:
+        t = msg.twist.twist
+        vel = (float(t.linear.x), float(t.linear.y), float(t.angular.z))
+        with self._lock:
+            self.odom_vel, self.odom_t = vel, self.clock.now()
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        with self._lock:
+            self.scan, self.scan_seq = msg, self.scan_seq + 1
+
+    # ---- reads (loop thread) -----------------------------------------------------------------------
+    def latest_grid(self, seen: int) -> tuple[GridMap | None, int]:
+        """The map if newer than sequence ``seen`` (else None) and the current sequence."""
+        with self._lock:
+            return (self.grid if self.grid_seq != seen else None), self.grid_seq
+
+    def latest_scan(self, seen: int) -> tuple[LaserScan | None, int]:
+        with self._lock:
+            return (self.scan if self.scan_seq != seen else None), self.scan_seq
+
+    def odom_age(self, now: float) -> float:
+        with self._lock:
+            return math.inf if self.odom_t is None else max(0.0, now - self.odom_t)
+
+    def robot_state(self, now: float) -> RobotState:
+        """Base pose in map (map→odom ∘ odom→base, each at its latest stamp); TfError if a link is missing."""
+        f = self.frames
+        m_o = self.tf.lookup_transform(f.map, f.odom)
+        o_b = self.tf.lookup_transform(f.odom, f.base)
+        pose = compose(m_o.to_pose2d(), o_b.to_pose2d())
+        ages = [now - tr.stamp for tr in (m_o, o_b) if tr.stamp > 0.0]  # stamp 0: static links only
+        with self._lock:
+            vel = self.odom_vel
+        return RobotState((float(pose[0]), float(pose[1]), float(pose[2])), vel, max([0.0, *ages]))
+
+    def core_scan(self, msg: LaserScan, robot: Pose) -> tuple[CoreScan, Pose] | None:
+        """The scan for the costmaps and the laser's pose in map (base pose ∘ base→laser from TF)."""
+        frame = msg.header.frame_id.lstrip("/") or self.frames.base
+        try:
+            mount = self.tf.lookup_pose2d(self.frames.base, frame)
+        except TfError as exc:
+            log.debug("no TF %s -> %s for the scan: %s", self.frames.base, frame, exc)
+            return None
+        sp = compose(robot, mount)
+        scan = CoreScan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
+                        float(msg.range_min), float(msg.range_max))
+        return scan, (float(sp[0]), float(sp[1]), float(sp[2]))
+
+    def missing(self) -> list[str]:
+        """What CMD_INIT still waits for (empty when map, odometry and the TF chain are all in)."""
+        out = []
+        with self._lock:
+            grid, odom = self.grid, self.odom_t
+        if grid is None:
+            out.append(f"no {self.bindings['map'].topic} received")
+        if odom is None:
+            out.append(f"no {self.bindings['odom'].topic} received")
+        f = self.frames
+        for a, b in ((f.map, f.odom), (f.odom, f.base)):
+            if not self.tf.can_transform(a, b):
+                out.append(f"no TF {a}→{b}")
+        return out
+
+    def close(self) -> None:
+        for s in self._subs:
+            s.close()
+        self._subs = []
+        self.tf.close()
+        self.clock.close()

@@ -1,0 +1,333 @@
+"""The control loop thread and the goal API around the (not thread-safe) Navigator.
+
+One lock guards the navigator: gRPC/MCP handlers call ``navigate``/``cancel``/``status`` while the loop
+ticks at the controller frequency on the provider's clock (sim time with ``use_sim_time``, so a
+faster-than-real-time simulator gets the same control rate in sim seconds). The loop never hangs a
+run: stale odometry or TF, a stalled /clock or an upstream leaving the atlas stop the robot and fail
+the run with the reason.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from nav2_wrapper.core import GoalRecord, Navigator
+from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
+from robonix_api.dds import FrameNotFoundError, Path, TfError
+from robonix_api.dds.convert import header, pose_stamped, twist
+from robonix_api.geometry import compose
+
+from .bridge_config import BridgeConfig
+from .bridge_goals import PlanarGoal
+from .bridge_inputs import Inputs, RobotState
+from .bridge_speed import SpeedLimits
+
+log = logging.getLogger("nav2_wrapper.loop")
+WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
+
+
+@dataclass
+class Publishers:
+    cmd_vel: Any
+    plan: Any | None
+
+
+class NavLoop:
+    def __init__(self, nav: Navigator, inputs: Inputs, pubs: Publishers, cfg: BridgeConfig, speed: SpeedLimits,
+                 upstream_ok: Callable[[], str] | None = None) -> None:
+        self.nav, self.inputs, self.pubs, self.cfg, self.speed = nav, inputs, pubs, cfg, speed
+        self.period = 1.0 / nav.cfg.navigator.controller_frequency
+        self.lock = threading.RLock()
+        self.accepting = False
+        self._upstream_ok = upstream_ok
+        self._upstream_lost = ""
+        self._stop = threading.Event()
+        self._grid_seq = self._scan_seq = 0
+        self._plan_sent: Any = None
+        self._state: RobotState | None = None
+        self._tf_bad_since: float | None = None
+        self._moving = False          # the last published command was non-zero
+        self._clock_last = -math.inf
+        self._clock_wall = time.monotonic()
+        self._paused = False
+        self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
+        self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
+
+    # ---- lifecycle ---------------------------------------------------------------------------------
+    def warm_up(self) -> None:
+        """Feed the first map and plan once, so the first goal does not pay for JIT loading (~0.3 s)."""
+        with self.lock:
+            grid, self._grid_seq = self.inputs.latest_grid(0)
+            try:
+                st = self.inputs.robot_state(self.inputs.clock.now())
+            except TfError:
+                return
+            self.nav.tick(self.inputs.clock.now(), st.pose, st.vel, grid)
+            x, y, _ = st.pose
+            for dx, dy in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)):
+                if self.nav.planner.plan(self.nav.global_costmap, (x, y), (x + dx, y + dy)).ok:
+                    break
+            self.nav.path = np.zeros((0, 2))
+
+    def start(self) -> None:
+        self._thread.start()
+        if self._upstream_ok is not None:
+            self._watch.start()
+
+    def set_accepting(self, on: bool, reason: str = "") -> None:
+        """ACTIVATE (True) / DEACTIVATE (False: the running goal is canceled and the robot stopped)."""
+        with self.lock:
+            self.accepting = on
+            if not on:
+                self._end_active(reason or "canceled: navigation deactivated", canceled=True)
+
+    def stop(self, reason: str = "canceled: navigation shutting down") -> None:
+        with self.lock:
+            self.accepting = False
+            self._end_active(reason, canceled=True)
+        self._stop.set()
+        for t in (self._thread, self._watch):
+            if t.is_alive() and t is not threading.current_thread():
+                t.join(5.0)
+        if self._thread.ident is not None:  # never started (failed INIT): nothing was ever commanded
+            self.publish_zero()
+
+    # ---- goal API (handler threads) ----------------------------------------------------------------
+    def navigate(self, goal: PlanarGoal | str) -> tuple[GoalRecord | None, str]:
+        """(record, preempted run_id or "").
+
+        The record is None while not accepting goals (inactive); a rejected goal still gets a run_id
+        and a FAILED record, so its status can be asked for like any other run.
+        """
+        rid = f"nav-{uuid.uuid4().hex[:8]}"
+        with self.lock:
+            if not self.accepting:
+                return None, ""
+            now = self.inputs.clock.now()
+            if isinstance(goal, str):
+                return self._reject(rid, (math.nan, math.nan, math.nan), goal, now), ""
+            if self._upstream_lost:
+                return self._reject(rid, (goal.x, goal.y, goal.yaw), self._upstream_lost, now), ""
+            xyz = self._to_map(goal)
+            if isinstance(xyz, str):
+                return self._reject(rid, (goal.x, goal.y, goal.yaw), xyz, now), ""
+            prev = self.nav.active
+            live = prev is not None and prev.state not in TERMINAL
+            rec = self.nav.navigate(*xyz, now, run_id=rid)
+            if rec.accepted and live:
+                self.speed.run_ended(prev.run_id)
+                return rec, prev.run_id
+            return rec, ""
+
+    def cancel(self, run_id: str) -> tuple[GoalRecord | None, bool]:
+        """(record, whether it was PENDING/RUNNING): a live run is CANCELED and the robot stopped at once."""
+        with self.lock:
+            rec = self.nav.status(run_id or None)
+            if rec is None:
+                return None, False
+            was_live = rec.state not in TERMINAL
+            if was_live:
+                self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+                self.publish_zero()
+                self.speed.run_ended(rec.run_id)
+            return rec, was_live
+
+    def status(self, run_id: str) -> GoalRecord | None:
+        with self.lock:
+            return self.nav.status(run_id or None)
+
+    def active_run(self) -> str:
+        with self.lock:
+            a = self.nav.active
+            return a.run_id if a is not None and a.state not in TERMINAL else ""
+
+    def remaining(self, rec: GoalRecord) -> float | None:
+        """Metres left along the path of a RUNNING goal (None otherwise)."""
+        with self.lock:
+            if rec is not self.nav.active or rec.state != RUNNING or self._state is None:
+                return None
+            return self.nav.controller.remaining(self._state.pose)
+
+    def apply_speed(self) -> None:
+        """Hand the effective speed limit to the controller (after any change; also every tick)."""
+        with self.lock:
+            self.nav.set_speed_limit(self.speed.mps(self.speed.effective()[0]), percentage=False)
+
+    # ---- helpers -----------------------------------------------------------------------------------
+    def _reject(self, rid: str, goal: tuple[float, float, float], reason: str, now: float) -> GoalRecord:
+        rec = GoalRecord(rid, goal, state=FAILED, detail=f"rejected: {reason}", accepted=False, started=now,
+                         finished=now)
+        self.nav.records[rid] = rec
+        self.nav.latest = rec
+        return rec
+
+    def _to_map(self, g: PlanarGoal) -> tuple[float, float, float] | str:
+        mf = self.cfg.frames.map
+        if g.frame in ("", mf):
+            return g.x, g.y, g.yaw
+        try:
+            base = self.inputs.tf.lookup_pose2d(mf, g.frame)
+        except FrameNotFoundError:
+            return (f"goal.header.frame_id: unknown frame {g.frame!r} (use {mf!r}, or a TF frame connected "
+                    f"to it; known: {', '.join(self.inputs.tf.frames()) or 'none'})")
+        except TfError as exc:
+            return f"goal.header.frame_id: cannot transform {g.frame!r} into {mf!r}: {exc}"
+        p = compose(base, (g.x, g.y, g.yaw))
+        return float(p[0]), float(p[1]), float(p[2])
+
+    def _end_active(self, reason: str, canceled: bool) -> None:
+        """Stop the running goal (CANCELED or FAILED with ``reason``) and the robot. Lock held."""
+        rec = self.nav.active
+        if rec is None or rec.state in TERMINAL:
+            return
+        self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+        if not canceled:
+            rec.state = FAILED
+        rec.detail = reason
+        self.speed.run_ended(rec.run_id)
+        self.publish_zero()
+        log.info("run %s %s: %s", rec.run_id, rec.state, reason)
+
+    def publish_zero(self) -> None:
+        try:
+            self.pubs.cmd_vel.publish(twist(0.0, 0.0, 0.0))
+        except RuntimeError:  # closed during teardown
+            pass
+        self._moving = False
+
+    # ---- the loop ----------------------------------------------------------------------------------
+    def _run(self) -> None:
+        clock = self.inputs.clock
+        due = clock.now()
+        while not self._stop.is_set():
+            if clock.use_sim_time:
+                reached = clock.sleep_until(due, timeout=WAIT_SLICE_S)
+            else:
+                self._stop.wait(max(0.0, min(due - time.time(), WAIT_SLICE_S)))
+                reached = time.time() >= due
+            if self._stop.is_set():
+                return
+            now = clock.now()
+            try:
+                self._watch_clock(now)
+                if reached:
+                    self._step(now)
+                    due += self.period
+                    if now > due + self.period:  # fell behind (slow machine): skip, do not burst
+                        due = now + self.period
+            except Exception:  # the loop must survive anything; the running goal is failed with the error
+                log.exception("navigation loop iteration failed")
+                with self.lock:
+                    self._end_active("navigation loop error (see provider log)", canceled=False)
+                self._stop.wait(0.05)
+
+    def _watch_clock(self, now: float) -> None:
+        """Checks that must run even when sim time stands still: an upstream that left the atlas fails the
+        run; a /clock not advancing stops the robot at once and fails the run after clock_timeout_s (wall)."""
+        if self._upstream_lost:
+            with self.lock:
+                self._end_active(self._upstream_lost, canceled=False)
+        if not self.inputs.clock.use_sim_time:
+            return
+        wall = time.monotonic()
+        if now > self._clock_last:
+            self._clock_last, self._clock_wall = now, wall
+            self._paused = False
+            return
+        stalled = wall - self._clock_wall
+        with self.lock:
+            rec = self.nav.active
+            if rec is None or rec.state in TERMINAL:
+                return
+            if stalled > self.cfg.clock_timeout_s:
+                self._end_active(f"/clock stalled for {stalled:.0f} s (simulator stopped?)", canceled=False)
+            elif stalled > self.cfg.clock_stall_s and not self._paused:
+                self._paused = True
+                self.publish_zero()
+                rec.detail = f"paused: /clock stalled for {stalled:.1f} s; robot stopped"
+
+    def _watch_upstream(self) -> None:
+        while not self._stop.wait(2.0):
+            try:
+                self._upstream_lost = self._upstream_ok() if self._upstream_ok else ""
+            except Exception as exc:  # atlas unreachable: not a reason to fail a run by itself
+                log.debug("upstream check failed: %s", exc)
+
+    def _health(self, now: float, state: RobotState | None) -> str:
+        """Why the running goal cannot go on ("" when it can)."""
+        to = self.cfg.data_timeout_s
+        age = self.inputs.odom_age(now)
+        if age > to:
+            odom = self.inputs.bindings["odom"].topic
+            return f"no odometry on {odom} for {age:.1f} s" if math.isfinite(age) else f"no odometry on {odom}"
+        if state is None:
+            if self._tf_bad_since is not None and now - self._tf_bad_since > to:
+                f = self.cfg.frames
+                return f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s"
+            return ""
+        if state.tf_age > to:
+            f = self.cfg.frames
+            return f"TF {f.map}→{f.base} is stale ({state.tf_age:.1f} s old)"
+        return ""
+
+    def _step(self, now: float) -> None:
+        try:
+            state: RobotState | None = self.inputs.robot_state(now)
+            self._tf_bad_since = None
+        except TfError:
+            state = None
+            self._tf_bad_since = now if self._tf_bad_since is None else self._tf_bad_since
+        grid, self._grid_seq = self.inputs.latest_grid(self._grid_seq)
+        scan_msg, self._scan_seq = self.inputs.latest_scan(self._scan_seq)
+        with self.lock:
+            rec = self.nav.active
+            live = rec is not None and rec.state not in TERMINAL
+            if live:
+                why = self._health(now, state)
+                if why:
+                    self._end_active(why, canceled=False)
+                    return
+                if self._paused:
+                    return
+                if state is None and self._moving:  # pose unknown for now: do not drive blind
+                    self.publish_zero()
+            if state is None or not (live or grid is not None or scan_msg is not None):
+                return  # idle and nothing new: skip the tick
+            self._state = state
+            self.apply_speed()
+            scan = self.inputs.core_scan(scan_msg, state.pose) if scan_msg is not None else None
+            cmd = self.nav.tick(now, state.pose, state.vel, grid, scan[0] if scan else None,
+                                scan[1] if scan else None)
+            if live:
+                self._publish_cmd(rec, cmd.vx, cmd.vy, cmd.wz)
+                if rec.state in TERMINAL:
+                    self.speed.run_ended(rec.run_id)
+            self._publish_plan(now)
+
+    def _publish_cmd(self, rec: GoalRecord, vx: float, vy: float, wz: float) -> None:
+        if rec.state in (PENDING, RUNNING) or self._moving:
+            self.pubs.cmd_vel.publish(twist(vx, vy, wz))
+            self._moving = bool(vx or vy or wz)
+
+    def _publish_plan(self, now: float) -> None:
+        path = self.nav.path
+        if self.pubs.plan is None or len(path) == 0 or path is self._plan_sent:
+            return
+        self._plan_sent = path
+        d = np.diff(path, axis=0)
+        yaw = np.append(np.arctan2(d[:, 1], d[:, 0]), 0.0) if len(path) > 1 else np.zeros(1)
+        if len(path) > 1:
+            yaw[-1] = yaw[-2]
+        mf = self.cfg.frames.map
+        self.pubs.plan.publish(Path(header=header(now, mf),
+                                    poses=[pose_stamped(float(x), float(y), float(a), now, mf)
+                                           for (x, y), a in zip(path, yaw, strict=True)]))
