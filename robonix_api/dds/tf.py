@@ -152,7 +152,8 @@ class TfBuffer:
         if node is not None:
             self._subs = [
                 node.create_subscription("/tf", TFMessage, lambda m: self._on_msg(m, False), "reliable", 100),
-                node.create_subscription("/tf_static", TFMessage, lambda m: self._on_msg(m, True), "latched", 1),
+                # Depth 100 like tf2's static listener: each static publisher's latched sample must survive.
+                node.create_subscription("/tf_static", TFMessage, lambda m: self._on_msg(m, True), "latched", 100),
             ]
 
     def _on_msg(self, msg: TFMessage, static: bool) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -123,3 +124,22 @@ def test_pose_and_odometry_helpers() -> None:
     assert pose == pytest.approx([1.0, 2.0, -0.5]) and vel == pytest.approx([0.1, 0.2, 0.3])
     assert od.pose.covariance[7] == 1.0 and od.child_frame_id == "base_link"
     assert twist_to_tuple(twist(0.5, -0.1, 1.9)) == (0.5, -0.1, 1.9)
+
+
+def test_static_transforms_from_two_publishers_both_survive(node: DdsNode) -> None:
+    """Two static broadcasters (e.g. robot description + SLAM) each latch one sample; a late buffer
+    must keep both (tf2's static listener depth), not just the most recent one."""
+    from robonix_api.dds import StaticTfBroadcaster, TfBuffer
+
+    other = DdsNode(name="second_static")
+    try:
+        StaticTfBroadcaster(node).send("base_link", "laser", 0.1, 0.0, 0.0, 0.0)
+        StaticTfBroadcaster(other).send("odom", "base_link", 1.0, 2.0, 0.5, 0.0)
+        late = TfBuffer(node)
+        deadline = time.monotonic() + 30
+        while not (late.can_transform("odom", "laser") or time.monotonic() > deadline):
+            time.sleep(0.05)
+        x, y, yaw = late.lookup_pose2d("odom", "laser")
+        assert abs(yaw - 0.5) < 1e-6 and abs(x - (1.0 + 0.1 * math.cos(0.5))) < 1e-6
+    finally:
+        other.close()
