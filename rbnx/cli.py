@@ -93,11 +93,16 @@ def build_parser() -> argparse.ArgumentParser:
     deploy_arg(lg)
     lg.add_argument("name", nargs="?", help="entry name (default: all)")
     lg.add_argument("-n", "--lines", type=int, default=20)
+
+    mc = sub.add_parser("map-card", help="write a map provider's dashboard map card as a PNG")
+    mc.add_argument("--provider", help="provider id (default: the one live map_card provider)")
+    mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
+    mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
     return p
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    from rbnx import cmd_build, cmd_lifecycle, cmd_query, cmd_validate
+    from rbnx import cmd_build, cmd_lifecycle, cmd_map, cmd_query, cmd_validate
 
     local: dict[str, Callable[[argparse.Namespace], int]] = {
         "boot": cmd_lifecycle.cmd_boot, "deploy": cmd_lifecycle.cmd_boot, "shutdown": cmd_lifecycle.cmd_shutdown,
@@ -107,7 +112,8 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.cmd in local:
         return local[args.cmd](args)
     remote = {"caps": cmd_query.cmd_caps, "contracts": cmd_query.cmd_contracts, "describe": cmd_query.cmd_describe,
-              "tools": cmd_query.cmd_tools, "channels": cmd_query.cmd_channels, "inspect": cmd_query.cmd_inspect}
+              "tools": cmd_query.cmd_tools, "channels": cmd_query.cmd_channels, "inspect": cmd_query.cmd_inspect,
+              "map-card": cmd_map.cmd_map_card}
     with Atlas(args.atlas) as atlas:
         return remote[args.cmd](args, atlas)
 

@@ -1,0 +1,160 @@
+"""The provider's CMD_INIT config, validated so every error names the field at fault.
+
+pydantic checks shapes and numbers (``extra="forbid"``: a typo is an error, not a silently ignored
+key); the ``slam`` block goes to :meth:`SlamConfig.from_dict`, which names unknown or bad keys itself.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from slam_service.core import SlamConfig
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_ROBOT = "config/panda_mobile.yaml"
+
+
+class ConfigError(ValueError):
+    """Bad CMD_INIT config; the message starts with the field path (e.g. ``frames.map: ...``)."""
+
+
+def default_map_dir() -> str:
+    """``$ROBONIX_MAP_DIR`` or ``~/.local/share/robonix/maps`` (resolved when the config is parsed)."""
+    return os.environ.get("ROBONIX_MAP_DIR", "").strip() or str(Path.home() / ".local/share/robonix/maps")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def _topic(v: str) -> str:
+    name = v.strip()
+    if not name:
+        return ""
+    if " " in name or not name.lstrip("/"):
+        raise ValueError(f"invalid topic name {v!r}")
+    return name if name.startswith("/") else "/" + name
+
+
+class Roles(_Model):
+    """Per input role (scan, odom): a topic override or a provider id pin; empty = resolve via the atlas."""
+
+    scan: str = ""
+    odom: str = ""
+
+
+class TopicRemap(Roles):
+    @field_validator("scan", "odom")
+    @classmethod
+    def _valid(cls, v: str) -> str:
+        return _topic(v)
+
+
+class Frames(_Model):
+    map: str = "map"
+    odom: str = "odom"
+    base: str = "base_link"
+
+    @field_validator("map", "odom", "base")
+    @classmethod
+    def _frame(cls, v: str) -> str:
+        name = v.strip().lstrip("/")
+        if not name or " " in name:
+            raise ValueError(f"invalid frame name {v!r}")
+        return name
+
+
+class InitialPose(_Model):
+    x: float
+    y: float
+    theta: float = 0.0
+
+    @field_validator("x", "y", "theta")
+    @classmethod
+    def _finite(cls, v: float) -> float:
+        if not math.isfinite(v):
+            raise ValueError("must be a finite number")
+        return v
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return (self.x, self.y, self.theta)
+
+
+class ProviderConfig(_Model):
+    topic_remap: TopicRemap = TopicRemap()
+    provider_ids: Roles = Roles()
+    frames: Frames = Frames()
+    use_sim_time: bool = True
+    map_dir: str = Field(default_factory=default_map_dir)
+    mode: Literal["mapping", "localization"] = "mapping"
+    map_id: str = ""  # load this saved map at INIT
+    initial_pose: InitialPose | None = None
+    slam: dict[str, Any] = Field(default_factory=dict)  # SlamConfig fields
+    map_publish_period_s: float = Field(1.0, gt=0)  # rate cap of /map
+    tf_period_s: float = Field(0.05, gt=0, le=0.1)  # map->odom republish period (wall): >= 10 Hz
+    scan_queue: int = Field(4, ge=1, le=100)  # scans waiting for the worker; oldest dropped beyond
+    robot_description: str = DEFAULT_ROBOT  # footprint for the map card
+
+    @field_validator("map_publish_period_s")
+    @classmethod
+    def _finite(cls, v: float) -> float:
+        if not math.isfinite(v):
+            raise ValueError("must be a finite number of seconds")
+        return v
+
+
+def resolve_path(path: str) -> Path:
+    """Absolute as given; relative: the working directory first, then the repository root."""
+    p = Path(path).expanduser()
+    if p.is_absolute() or p.exists():
+        return p
+    return REPO_ROOT / p
+
+
+def _format(exc: ValidationError) -> str:
+    parts = []
+    for e in exc.errors():
+        loc = ".".join(str(x) for x in e["loc"]) or "config"
+        msg = e["msg"].removeprefix("Value error, ")
+        parts.append(f"{loc}: {msg}")
+    return "; ".join(parts)
+
+
+def parse_config(raw: dict[str, Any]) -> tuple[ProviderConfig, SlamConfig]:
+    """Validate the CMD_INIT dict; ConfigError names the field."""
+    try:
+        cfg = ProviderConfig.model_validate(raw)
+    except ValidationError as exc:
+        raise ConfigError(_format(exc)) from None
+    try:
+        slam = SlamConfig.from_dict(dict(cfg.slam))
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"slam: {exc}") from None
+    if cfg.initial_pose is not None and not cfg.map_id:
+        raise ConfigError("initial_pose: only meaningful with map_id (the pose in that map)")
+    if cfg.mode == "localization" and not cfg.map_id:
+        raise ConfigError("mode: localization needs map_id (a saved map to localize in)")
+    return cfg, slam
+
+
+def load_footprint(path: str) -> list[tuple[float, float]]:
+    """The base-frame footprint polygon from a robot description YAML (``footprint: [[x, y], ...]``)."""
+    p = resolve_path(path)
+    try:
+        data = yaml.safe_load(p.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"robot_description: cannot read {p}: {exc}") from None
+    fp = data.get("footprint") if isinstance(data, dict) else None
+    try:
+        poly = [(float(a), float(b)) for a, b in fp]  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise ConfigError(f"robot_description: {p} has no valid 'footprint' list of [x, y]") from None
+    if len(poly) < 3 or not all(math.isfinite(v) for xy in poly for v in xy):
+        raise ConfigError(f"robot_description: {p} footprint needs >= 3 finite points")
+    return poly

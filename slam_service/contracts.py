@@ -1,0 +1,201 @@
+"""The map RPC contracts (``robonix/service/map/...``), one handler each, served over gRPC and MCP.
+
+Handlers are live from process start: before a successful CMD_INIT they answer ``ok=false`` with
+"not initialized". Malformed arguments (NaN pose, a map_id with a path in it) answer INVALID_ARGUMENT
+naming the field; an operation that fails (unwritable map_dir, a corrupt map file) answers ``ok=false``
+with the reason and leaves the running state and the files on disk as they were.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from collections.abc import Callable
+from typing import Any
+
+import grpc
+
+from robonix_api import Service, StatusError
+from robonix_api.proto_gen import map_pb2
+from slam_service.core import SlamEngine, render_map_png
+from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id
+
+log = logging.getLogger("slam_service.contracts")
+NS = "robonix/service/map/"
+NOT_INIT = "not initialized (send CMD_INIT)"
+MODES = ("mapping", "localization")
+
+
+def _finite(req: Any, *names: str) -> None:
+    for n in names:
+        v = getattr(req, n)
+        if not math.isfinite(v):
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{n}: must be a finite number, got {v}")
+
+
+def _map_id(map_id: str) -> str:
+    try:
+        return check_id(map_id)
+    except MapIdError as exc:
+        raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, str(exc)) from None
+
+
+class MapContracts:
+    """Handlers bound to whatever session the provider has (``session()`` returns None before INIT)."""
+
+    def __init__(self, session: Callable[[], Any]) -> None:
+        self._session = session
+
+    def register(self, svc: Service) -> None:
+        table = {"save_map": self.save_map, "load_map": self.load_map, "list_maps": self.list_maps,
+                 "delete_map": self.delete_map, "switch_mode": self.switch_mode, "get_mode": self.get_mode,
+                 "get_pose": self.get_pose, "reset_map": self.reset_map, "pose_estimate": self.pose_estimate,
+                 "map_card": self.map_card}
+        for name, fn in table.items():
+            svc.grpc(NS + name)(fn)
+            svc.mcp(NS + name)(fn)
+
+    # ---------------------------------------------------------------- maps on disk
+    def save_map(self, req: map_pb2.SaveMap_Request) -> map_pb2.SaveMap_Response:
+        """Save the current map as <map_dir>/<map_id>/ (map.yaml + map.pgm, session.npz, meta.json)."""
+        map_id = _map_id(req.map_id)
+        s = self._session()
+        if s is None:
+            return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
+        with s.loop.lock:  # consistent grid + session; scans wait meanwhile
+            engine: SlamEngine = s.loop.engine
+            grid = engine.map()
+            session = engine.session() if engine.graph.n_nodes else None
+        writer = None
+        if session is not None:
+            from slam_service.core import save_session
+
+            def writer(path: Any) -> None:
+                save_session(session, path)
+        try:
+            path = s.store.save(map_id, grid, writer, req.note)
+        except MapStoreError as exc:
+            log.warning("save_map: %s", exc)
+            return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=str(exc))
+        return map_pb2.SaveMap_Response(ok=True, map_id=map_id,
+                                        detail=f"saved {grid.width}x{grid.height} @ {grid.resolution} m to {path}")
+
+    def load_map(self, req: map_pb2.LoadMap_Request) -> map_pb2.LoadMap_Response:
+        """Load a saved map: localization (grid) by default, or mapping (continue the saved session)."""
+        map_id = _map_id(req.map_id)
+        mode = req.mode.strip() or "localization"
+        if mode not in MODES:
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {mode!r}")
+        if req.has_initial_pose:
+            _finite(req, "x", "y", "theta")
+        s = self._session()
+        if s is None:
+            return map_pb2.LoadMap_Response(ok=False, detail=NOT_INIT)
+        pose = (req.x, req.y, req.theta) if req.has_initial_pose else None
+        try:
+            s.load(map_id, mode, pose)
+        except (MapStoreError, ValueError) as exc:
+            log.warning("load_map: %s", exc)
+            return map_pb2.LoadMap_Response(ok=False, detail=str(exc))
+        return map_pb2.LoadMap_Response(ok=True, detail=f"loaded {map_id!r} in {mode} mode"
+                                        + (f" at ({req.x:g}, {req.y:g}, {req.theta:g})" if pose else ""))
+
+    def list_maps(self, req: map_pb2.ListMaps_Request) -> map_pb2.ListMaps_Response:
+        """Saved maps as JSON: [{map_id, path, note, created, resolution, width, height, has_session}]."""
+        s = self._session()
+        if s is None:
+            return map_pb2.ListMaps_Response(ok=False, detail=NOT_INIT, maps_json="[]")
+        store: MapStore = s.store
+        maps = store.list()
+        return map_pb2.ListMaps_Response(ok=True, detail=f"{len(maps)} map(s) in {store.root}",
+                                         maps_json=json.dumps(maps))
+
+    def delete_map(self, req: map_pb2.DeleteMap_Request) -> map_pb2.DeleteMap_Response:
+        """Delete a saved map's folder (the map in memory is not affected)."""
+        map_id = _map_id(req.map_id)
+        s = self._session()
+        if s is None:
+            return map_pb2.DeleteMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
+        try:
+            s.store.delete(map_id)
+        except MapStoreError as exc:
+            return map_pb2.DeleteMap_Response(ok=False, map_id=map_id, detail=str(exc))
+        return map_pb2.DeleteMap_Response(ok=True, map_id=map_id, detail="deleted")
+
+    # ---------------------------------------------------------------- mode, pose, reset
+    def switch_mode(self, req: map_pb2.SwitchMode_Request) -> map_pb2.SwitchMode_Response:
+        """mapping <-> localization (localization on the loaded map, or on the map built so far)."""
+        mode = req.mode.strip()
+        if mode not in MODES:
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {mode!r}")
+        s = self._session()
+        if s is None:
+            return map_pb2.SwitchMode_Response(ok=False, detail=NOT_INIT)
+        with s.loop.lock:
+            try:
+                s.loop.engine.set_mode(mode)
+            except ValueError as exc:
+                return map_pb2.SwitchMode_Response(ok=False, detail=str(exc))
+        s.loop.map_changed()
+        return map_pb2.SwitchMode_Response(ok=True, detail=f"mode {mode}")
+
+    def get_mode(self, req: map_pb2.GetMode_Request) -> map_pb2.GetMode_Response:
+        """Current mode; detail is JSON: integrating (ACTIVE) or paused, plus input/skip counters."""
+        s = self._session()
+        if s is None:
+            return map_pb2.GetMode_Response(ok=False, detail=NOT_INIT)
+        st = s.loop.stats()
+        return map_pb2.GetMode_Response(ok=True, mode=st["mode"], detail=json.dumps(st))
+
+    def get_pose(self, req: map_pb2.GetPose_Request) -> map_pb2.GetPose_Response:
+        """Robot (base) pose in the map frame: last map->odom estimate composed with the latest odometry."""
+        s = self._session()
+        if s is None:
+            return map_pb2.GetPose_Response(ok=False, detail=NOT_INIT)
+        x, y, th = s.loop.robot_pose()
+        n = s.loop.engine.stats.scans_integrated
+        return map_pb2.GetPose_Response(ok=True, x=x, y=y, theta=th, frame_id=s.cfg.frames.map,
+                                        detail=f"{n} scan(s) integrated")
+
+    def reset_map(self, req: map_pb2.ResetMap_Request) -> map_pb2.ResetMap_Response:
+        """Forget the map and trajectory (a map loaded for localization is kept)."""
+        s = self._session()
+        if s is None:
+            return map_pb2.ResetMap_Response(ok=False, detail=NOT_INIT)
+        with s.loop.lock:
+            s.loop.engine.reset()
+        s.loop.map_changed()
+        return map_pb2.ResetMap_Response(ok=True, detail="map cleared")
+
+    def pose_estimate(self, req: map_pb2.PoseEstimate_Request) -> map_pb2.PoseEstimate_Response:
+        """Set the robot's map-frame pose (applied at the next scan), e.g. to relocalize."""
+        _finite(req, "x", "y", "theta")
+        s = self._session()
+        if s is None:
+            return map_pb2.PoseEstimate_Response(ok=False, detail=NOT_INIT)
+        s.loop.set_pose((req.x, req.y, req.theta))
+        return map_pb2.PoseEstimate_Response(ok=True, detail=f"pose set to ({req.x:g}, {req.y:g}, {req.theta:g}); "
+                                                             "applied at the next scan")
+
+    # ---------------------------------------------------------------- dashboard card
+    def map_card(self, req: map_pb2.GetMapCard_Request) -> map_pb2.GetMapCard_Response:
+        """PNG of the grid (unknown grey, free white, occupied black) + size, origin, robot pose, footprint."""
+        s = self._session()
+        if s is None:
+            return map_pb2.GetMapCard_Response(ok=False, detail=NOT_INIT)
+        with s.loop.lock:
+            engine: SlamEngine = s.loop.engine
+            grid = engine.map()
+            traj = engine.trajectory() if engine.mode == "mapping" else None
+            has_pose = engine.stats.scans_received > 0 or engine.mode == "localization"
+        pose = s.loop.robot_pose() if has_pose else None
+        png = render_map_png(grid, pose, s.footprint if pose is not None else None, traj)
+        flat = [v for xy in s.footprint for v in xy]
+        resp = map_pb2.GetMapCard_Response(ok=True, detail=f"mode {engine.mode}", png=png, width=grid.width,
+                                           height=grid.height, resolution=grid.resolution, origin_x=grid.origin_x,
+                                           origin_y=grid.origin_y, frame_id=s.cfg.frames.map,
+                                           has_robot_pose=pose is not None, footprint_polygon_xy=flat)
+        if pose is not None:
+            resp.robot_x, resp.robot_y, resp.robot_yaw = pose
+        return resp

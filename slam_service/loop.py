@@ -1,0 +1,312 @@
+"""The processing side of the provider: scan queue -> worker thread -> SlamEngine; /map and TF map->odom.
+
+The DDS callback only queues scans (dropping the oldest when the worker is behind, counted), so a
+slow optimisation never stalls the data plane. The worker pairs each scan with the odometry pose at the
+scan's stamp (TF odom->base, interpolated; the latest /odom as a fallback) and the lidar mount
+(static TF base->laser). Bad input is skipped with a counter and a rate-limited warning, never raised.
+A publisher thread keeps map->odom on /tf alive (also while paused) and publishes /map when it changed,
+at most once per ``map_publish_period_s``.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robonix_api.dds import LaserScan, Odometry, SimClock, TfBroadcaster, TfBuffer, TfError
+from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
+from robonix_api.geometry import compose
+from slam_service.config import Frames
+from slam_service.core import Scan, SlamEngine
+
+log = logging.getLogger("slam_service.loop")
+ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
+TF_WAIT_S = 0.3  # wall time the worker waits for odom->base at the scan stamp
+
+
+@dataclass(frozen=True)
+class Binding:
+    """One resolved input: topic + QoS preset, and where it came from."""
+
+    role: str
+    topic: str
+    qos: str
+    provider_id: str = ""
+    source: str = "atlas"
+
+
+class RateLimitedLog:
+    """At most one warning per key every ``period_s``; the suppressed count is added to the next one."""
+
+    def __init__(self, period_s: float = 5.0) -> None:
+        self.period_s = period_s
+        self._last: dict[str, float] = {}
+        self._suppressed: dict[str, int] = collections.defaultdict(int)
+
+    def __call__(self, key: str, msg: str) -> None:
+        now = time.monotonic()
+        if now - self._last.get(key, -math.inf) < self.period_s:
+            self._suppressed[key] += 1
+            return
+        n = self._suppressed.pop(key, 0)
+        self._last[key] = now
+        log.warning("%s%s", msg, f" (+{n} similar suppressed)" if n else "")
+
+
+class EngineLogFilter(logging.Filter):
+    """Rate-limits the core's per-scan "skipped scan" warnings (one per counter every ``period_s``)."""
+
+    def __init__(self, period_s: float = 5.0) -> None:
+        super().__init__()
+        self.period_s = period_s
+        self._last: dict[str, float] = {}
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno != logging.WARNING or "skipped scan" not in str(record.msg):
+            return True
+        args = record.args if isinstance(record.args, tuple) else ()
+        key = str(args[1]) if len(args) >= 2 else str(record.msg)
+        now = time.monotonic()
+        if now - self._last.get(key, -math.inf) < self.period_s:
+            return False
+        self._last[key] = now
+        return True
+
+
+def install_engine_log_filter() -> None:
+    eng = logging.getLogger("slam_service.core.engine")
+    if not any(isinstance(f, EngineLogFilter) for f in eng.filters):
+        eng.addFilter(EngineLogFilter())
+
+
+class SlamLoop:
+    def __init__(self, node: Any, bindings: dict[str, Binding], frames: Frames, engine: SlamEngine, map_pub: Any,
+                 *, use_sim_time: bool, map_period_s: float, tf_period_s: float, queue_size: int) -> None:
+        self.frames, self.bindings = frames, bindings
+        self.engine = engine
+        self.lock = threading.RLock()  # guards the engine (worker, RPC handlers, publisher)
+        self.integrating = False
+        self._resumed = False  # first scan after a pause: the robot may have moved meanwhile
+        self.clock = SimClock(node, use_sim_time)
+        self.use_sim_time = use_sim_time
+        self.tf = TfBuffer(node)
+        self._tf_out = TfBroadcaster(node)
+        self._map_pub = map_pub
+        self._map_period, self._tf_period = map_period_s, tf_period_s
+        self._queue: collections.deque[LaserScan] = collections.deque()
+        self._queue_size = queue_size
+        self._cv = threading.Condition()
+        self._stop = threading.Event()
+        self._warn = RateLimitedLog()
+        self._mounts: dict[str, tuple[float, float, float]] = {}
+        self._odom: tuple[float, tuple[float, float, float]] | None = None  # (stamp, pose) of the latest /odom
+        self._m2o = engine.map_to_odom()
+        self._last_stamp = 0.0  # latest scan stamp processed
+        self._last_tf_wall = -math.inf
+        self._map_dirty = self._has_map()
+        self._map_clock, self._map_wall = -math.inf, -math.inf
+        self.counters: dict[str, int] = collections.Counter()
+        self._subs = [
+            node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan, bindings["scan"].qos),
+            node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom, bindings["odom"].qos),
+        ]
+        self._threads = [threading.Thread(target=self._work, name="slam-worker", daemon=True),
+                         threading.Thread(target=self._publish_loop, name="slam-publisher", daemon=True)]
+        for th in self._threads:
+            th.start()
+
+    # ---------------------------------------------------------------- callbacks (DDS thread)
+    def _on_scan(self, msg: LaserScan) -> None:
+        self.counters["scans_received"] += 1
+        if not self.integrating:
+            self.counters["scans_paused"] += 1
+            return
+        with self._cv:
+            if len(self._queue) >= self._queue_size:
+                self._queue.popleft()
+                self.counters["scans_dropped_behind"] += 1
+                self._warn("queue", f"SLAM is behind: dropped the oldest queued scan "
+                                    f"({self.counters['scans_dropped_behind']} so far)")
+            self._queue.append(msg)
+            self._cv.notify()
+
+    def _on_odom(self, msg: Odometry) -> None:
+        if msg.header.frame_id.strip().lstrip("/") != self.frames.odom:
+            self.counters["odom_wrong_frame"] += 1
+            self._warn("odom_frame", f"/odom in frame {msg.header.frame_id!r}, expected {self.frames.odom!r}: ignored")
+            return
+        self._odom = (msg.header.stamp.to_sec(), pose_to_xyyaw(msg.pose.pose))
+
+    # ---------------------------------------------------------------- worker
+    def _work(self) -> None:
+        while not self._stop.is_set():
+            with self._cv:
+                if not self._queue:
+                    self._cv.wait(0.5)
+                    continue
+                msg = self._queue.popleft()
+            try:
+                self._handle(msg)
+            except Exception as exc:  # a bug or an odd message must not kill mapping
+                self.counters["worker_errors"] += 1
+                log.exception("scan processing failed: %s", exc)
+
+    def _skip(self, counter: str, msg: str) -> None:
+        self.counters[counter] += 1
+        self._warn(counter, f"skipped scan: {msg} ({counter}={self.counters[counter]})")
+
+    def _mount(self, frame: str) -> tuple[float, float, float]:
+        if frame not in self._mounts:
+            if not self.tf.wait_for_transform(self.frames.base, frame, None, TF_WAIT_S):
+                raise TfError(f"no TF {self.frames.base} -> {frame}")
+            self._mounts[frame] = self.tf.lookup_pose2d(self.frames.base, frame)
+        return self._mounts[frame]
+
+    def _odom_at(self, t: float) -> tuple[float, float, float] | None:
+        f = self.frames
+        if self.tf.wait_for_transform(f.odom, f.base, t, TF_WAIT_S):
+            try:
+                return self.tf.lookup_pose2d(f.odom, f.base, t)
+            except TfError:
+                pass
+        latest = self._odom
+        if latest is not None and abs(latest[0] - t) <= ODOM_FALLBACK_S:
+            return latest[1]
+        return None
+
+    def _handle(self, msg: LaserScan) -> None:
+        frame = msg.header.frame_id.strip().lstrip("/")
+        t = msg.header.stamp.to_sec()
+        if not frame:
+            return self._skip("scans_bad_frame", "empty header.frame_id")
+        if not math.isfinite(t):
+            return self._skip("scans_bad_stamp", f"stamp {t}")
+        try:
+            mount = self._mount(frame)
+        except TfError as exc:
+            return self._skip("scans_no_tf", f"frame_id {frame!r} is not connected to {self.frames.base} ({exc})")
+        odom = self._odom_at(t)
+        if odom is None:
+            return self._skip("scans_no_odom", f"no odometry ({self.frames.odom} -> {self.frames.base}) at t={t:.3f}")
+        scan = Scan(np.asarray(msg.ranges, dtype=np.float32), float(msg.angle_min), float(msg.angle_increment),
+                    float(msg.range_min), float(msg.range_max), stamp=t, mount=mount, frame_id=frame)
+        with self.lock:
+            if not self.integrating:  # paused while the scan was queued
+                return None
+            if self._resumed:  # odometry is trusted across a pause: keep map->odom, skip the jump check
+                self.engine.set_initial_pose(compose(self.engine.map_to_odom(), odom))
+                self._resumed = False
+            upd = self.engine.process(scan, odom, t)
+            self._m2o = upd.map_to_odom
+            self._last_stamp = max(self._last_stamp, t)
+            if upd.map_changed:
+                self._map_dirty = True
+        self._send_tf(t)
+        return None
+
+    # ---------------------------------------------------------------- outputs
+    def _send_tf(self, stamp: float) -> None:
+        x, y, th = (float(v) for v in self._m2o)
+        self._tf_out.send(self.frames.map, self.frames.odom, x, y, th, stamp)
+        self._last_tf_wall = time.monotonic()
+        self.counters["tf_sent"] += 1
+
+    def _has_map(self) -> bool:
+        return self.engine.mode == "localization" or self.engine.graph.n_nodes > 0
+
+    def _publish_loop(self) -> None:
+        while not self._stop.wait(self._tf_period / 2):
+            try:
+                now = self.clock.now()
+                stamp = max(now, self._last_stamp)
+                if time.monotonic() - self._last_tf_wall >= self._tf_period and (stamp > 0 or not self.use_sim_time):
+                    self._send_tf(stamp)
+                self._maybe_publish_map(now)
+            except Exception as exc:  # DDS closing under us at shutdown, or a bug: keep the thread alive
+                if self._stop.is_set():
+                    return
+                self._warn("publisher", f"publisher iteration failed: {exc}")
+
+    def _maybe_publish_map(self, now: float) -> None:
+        if not self._map_dirty:
+            return
+        wall = time.monotonic()
+        if now - self._map_clock < self._map_period and wall - self._map_wall < self._map_period \
+                and now >= self._map_clock:
+            return
+        with self.lock:
+            grid = self.engine.map()
+            self._map_dirty = False
+        self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
+        self._map_clock, self._map_wall = now, wall
+        self.counters["maps_published"] += 1
+
+    # ---------------------------------------------------------------- control (RPC / lifecycle threads)
+    def set_integrating(self, on: bool) -> None:
+        with self.lock:
+            if on and not self.integrating and self.engine.stats.scans_received:
+                self._resumed = True
+            self.integrating = on
+        if not on:
+            with self._cv:
+                self.counters["scans_paused"] += len(self._queue)
+                self._queue.clear()
+
+    def replace_engine(self, engine: SlamEngine) -> None:
+        """Swap in a freshly loaded engine (load_map): the map is republished at once."""
+        with self.lock:
+            self.engine = engine
+            self._resumed = False  # the loaded engine has its own start pose
+            self._m2o = engine.map_to_odom()
+            self._map_dirty = True
+            self._map_clock = self._map_wall = -math.inf
+
+    def map_changed(self) -> None:
+        """Force a /map publication (after reset_map / switch_mode), bypassing the rate cap."""
+        with self.lock:
+            self._m2o = self.engine.map_to_odom()
+            self._map_dirty = True
+            self._map_clock = self._map_wall = -math.inf
+
+    def set_pose(self, pose: tuple[float, float, float]) -> None:
+        """A pose estimate (map frame) applied at the next scan; it wins over the resume re-anchoring."""
+        with self.lock:
+            self.engine.set_initial_pose(pose)
+            self._resumed = False
+
+    def robot_pose(self) -> tuple[float, float, float]:
+        """Live base pose in map: map->odom (last estimate) composed with the latest odom->base."""
+        with self.lock:
+            m2o, pose = self.engine.map_to_odom(), self.engine.pose()
+        try:
+            o2b = self.tf.lookup_pose2d(self.frames.odom, self.frames.base)
+        except TfError:
+            return (float(pose[0]), float(pose[1]), float(pose[2]))
+        p = compose(m2o, o2b)
+        return (float(p[0]), float(p[1]), float(p[2]))
+
+    def stats(self) -> dict[str, Any]:
+        with self.lock:
+            engine = self.engine.stats.to_dict()
+            mode = self.engine.mode
+        return {"mode": mode, "integrating": self.integrating, **dict(self.counters), "engine": engine}
+
+    def close(self) -> None:
+        self._stop.set()
+        with self._cv:
+            self._cv.notify_all()
+        for th in self._threads:
+            th.join(5.0)
+        for item in (*self._subs, self.tf, self.clock, self._tf_out):
+            try:
+                item.close()
+            except Exception:  # closing must not stop the teardown of the rest
+                log.debug("closing %s failed", type(item).__name__, exc_info=True)
+        self._subs = []
