@@ -80,6 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("describe", help="one provider in detail")
     d.add_argument("--provider", required=True)
     d.add_argument("--json", action="store_true")
+    d.add_argument("--check", action="store_true",
+                   help="health check: one line, exit 0 only if registered and not TERMINATED/ERROR")
 
     t = sub.add_parser("tools", help="MCP tools (mcp-transport capabilities)")
     t.add_argument("--json", action="store_true")
@@ -98,6 +100,9 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("--provider", help="provider id (default: the one live map_card provider)")
     mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
     mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
+
+    from rbnx import cmd_demo
+    cmd_demo.add_parser(sub)
     return p
 
 
@@ -109,6 +114,9 @@ def _dispatch(args: argparse.Namespace) -> int:
         "start": cmd_lifecycle.cmd_start, "logs": cmd_lifecycle.cmd_logs, "build": cmd_build.cmd_build,
         "validate": cmd_validate.cmd_validate,
     }
+    if args.cmd == "demo":
+        from rbnx import cmd_demo
+        return cmd_demo.cmd_demo(args)
     if args.cmd in local:
         return local[args.cmd](args)
     remote = {"caps": cmd_query.cmd_caps, "contracts": cmd_query.cmd_contracts, "describe": cmd_query.cmd_describe,

@@ -108,6 +108,11 @@ def cmd_describe(args: argparse.Namespace, atlas: Atlas) -> int:
     if p is None:
         print(f"rbnx describe: no provider {args.provider!r} at {atlas.addr}")
         return 1
+    state = STATE_NAMES.get(p.state, str(p.state))
+    if getattr(args, "check", False):  # container healthcheck: registered and alive
+        healthy = state not in ("terminated", "error")
+        print(f"{p.id}: {state}" + (f" ({p.state_detail})" if p.state_detail else ""))
+        return 0 if healthy else 1
     if args.json:
         d = _to_dict(p)
         for c, cd in zip(p.capabilities, d.get("capabilities", []), strict=True):
