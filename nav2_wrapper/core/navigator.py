@@ -37,6 +37,7 @@ class NavigatorConfig:
     min_replan_interval: float = 0.25      # s between event-triggered replans
     blocked_timeout: float = 2.0           # s the controller may find no safe command before recovering
     pending_timeout: float = 30.0          # s a goal may wait for the first map + pose
+    unknown_goal_margin: float = 10.0      # m a goal may lie beyond the current map when planning through unknown
     global_frame: str = "map"
     robot_base_frame: str = "base_link"
 
@@ -110,6 +111,7 @@ class Navigator:
         self.latest: GoalRecord | None = None
         self.path = np.zeros((0, 2))
         self.has_map = False
+        self._map: GridMap | None = None
         self._ids = itertools.count(1)
         self._last_tick: float | None = None
         self._reset_run()
@@ -121,6 +123,8 @@ class Navigator:
         rec = GoalRecord(rid, (float(x), float(y), float(yaw)), started=now)
         self.records[rid] = rec
         self.latest = rec
+        if self._map is not None and all(math.isfinite(v) for v in (x, y)):
+            self.global_costmap.set_static_map(self._global_map(self._map, [*self._goals(), (x, y)]))
         reason = validate_goal(x, y, yaw, self.global_costmap) if self.has_map else (
             None if all(math.isfinite(v) for v in (x, y, yaw)) else f"goal has non-finite coordinates ({x}, {y}, {yaw})")
         if reason:
@@ -172,7 +176,8 @@ class Navigator:
     def _update_costmaps(self, pose: Pose, grid: GridMap | None, scan: LaserScan | None,
                          sensor_pose: Pose | None) -> None:
         if grid is not None:
-            self.global_costmap.set_static_map(grid)
+            self._map = grid
+            self.global_costmap.set_static_map(self._global_map(grid, self._goals()))
             self.local_costmap.set_static_map(grid)
             self.has_map = True
         self.local_costmap.update_origin(pose[0], pose[1])
@@ -245,6 +250,31 @@ class Navigator:
         return Command(out.vx, out.vy, out.wz, rec.state, rec.detail, rec.run_id)
 
     # ---- helpers ----------------------------------------------------------------------------------
+    def _goals(self) -> list[tuple[float, float]]:
+        rec = self.active
+        return [(rec.goal[0], rec.goal[1])] if rec is not None and rec.state not in TERMINAL else []
+
+    def _global_map(self, grid: GridMap, goals: list[tuple[float, float]]) -> GridMap:
+        """With allow_unknown, pad the map with unknown cells so goals up to ``unknown_goal_margin`` beyond it
+        lie on the global costmap: a SLAM map covers only what was seen so far, and goals may be beyond."""
+        if not goals or not self.cfg.planner.allow_unknown or abs(grid.origin_yaw) > 1e-9:
+            return grid
+        res = grid.resolution
+        room = self.cfg.global_costmap.inflation_radius + self.cfg.planner.tolerance + res
+        x0, y0 = grid.origin_x, grid.origin_y
+        x1, y1 = x0 + grid.width * res, y0 + grid.height * res
+        lo_x, lo_y, hi_x, hi_y = x0, y0, x1, y1
+        for gx, gy in goals:
+            if max(x0 - gx, gx - x1, y0 - gy, gy - y1) <= self.cfg.navigator.unknown_goal_margin:
+                lo_x, lo_y = min(lo_x, gx - room), min(lo_y, gy - room)
+                hi_x, hi_y = max(hi_x, gx + room), max(hi_y, gy + room)
+        left, bottom = math.ceil((x0 - lo_x) / res - 1e-9), math.ceil((y0 - lo_y) / res - 1e-9)
+        right, top = math.ceil((hi_x - x1) / res - 1e-9), math.ceil((hi_y - y1) / res - 1e-9)
+        if left == right == bottom == top == 0:
+            return grid
+        data = np.pad(grid.data, ((bottom, top), (left, right)), constant_values=-1)
+        return GridMap(data, res, x0 - left * res, y0 - bottom * res, 0.0, grid.frame_id)
+
     def _plan(self, pose: Pose, now: float) -> PlanResult:
         goal = self.active.goal if self.active else pose
         res = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
