@@ -22,14 +22,14 @@ from types import FrameType
 from typing import Any
 
 from rbnx.demo_boot import BootChild, DemoError, pick_domain_id
-from rbnx.demo_goals import TERMINAL, Goal, choose_goals, fmt_s, parse_detail, path_length
+from rbnx.demo_goalrun import GoalRunner
+from rbnx.demo_goals import Goal, choose_goals, fmt_s
 from rbnx.demo_record import Recorder, render_map
 from rbnx.demo_report import GoalResult, LiveLine, print_table, write_json
 from rbnx.demo_rpc import DemoRpc
 
 DEFAULT_DEPLOY = Path("examples") / "sim" / "deploy.yaml"
 REPO_DEPLOY = Path(__file__).resolve().parents[1] / DEFAULT_DEPLOY
-POLL_S = 0.3
 MIN_GOAL_DIST_M = 1.0
 
 
@@ -133,96 +133,6 @@ class _Stop:
             signal.signal(s, h)
 
 
-# ---------------------------------------------------------------------- one goal
-
-
-class GoalRunner:
-    """Send one goal, follow it to a terminal state with a live line, measure it against ground truth."""
-
-    def __init__(self, rpc: DemoRpc, rec: Recorder, boot: BootChild, stop: threading.Event,
-                 timeout_s: float, line: LiveLine) -> None:
-        self.rpc, self.rec, self.boot, self.stop = rpc, rec, boot, stop
-        self.timeout_s, self.line = timeout_s, line
-
-    def run(self, res: GoalResult, n: int) -> GoalResult:
-        g = res.goal
-        tag = f"goal {res.index}/{n} {g.name} ({g.x:.2f}, {g.y:.2f})"
-        gt_mark, plan_mark = self.rec.mark()
-        gt0 = self.rec.sample()
-        t0 = time.monotonic()
-        accepted, res.run_id, res.detail = self.rpc.navigate(g)
-        if not accepted:
-            res.state = "REJECTED"
-            self.line.done(f"{tag}: REJECTED: {res.detail}")
-            return res
-        st_state, errors = "PENDING", 0
-        while True:
-            if not self.boot.running():
-                raise DemoError(f"rbnx boot exited (code {self.boot.proc.returncode if self.boot.proc else '?'}) "
-                                f"during {tag}", self.boot.log_tail())
-            if self.stop.is_set():
-                self.rpc.cancel(res.run_id)
-                st_state, res.detail = "CANCELED", "interrupted by the user"
-                break
-            if time.monotonic() - t0 > self.timeout_s:
-                self.rpc.cancel(res.run_id)
-                st_state, res.detail = "TIMEOUT", f"no result after {self.timeout_s:g} s wall (goal cancelled)"
-                break
-            try:
-                st = self.rpc.status(res.run_id)
-                errors = 0
-            except DemoError as exc:
-                errors += 1
-                if errors >= 10:
-                    st_state, res.detail = "FAILED", f"status unavailable: {exc}"
-                    break
-                self.stop.wait(POLL_S)
-                continue
-            st_state, res.detail = st.state, st.detail
-            if st_state in TERMINAL:
-                break
-            self.line.update(st_state, self._progress(tag, st_state, res.detail, gt0, t0))
-            self.stop.wait(POLL_S)
-        res.state = st_state
-        res.duration_wall_s = time.monotonic() - t0
-        self._measure(res, gt0, gt_mark, plan_mark)
-        err = f", {res.final_error_m:.2f} m from target" if res.final_error_m is not None else ""
-        self.line.done(f"{tag}: {res.state} in {fmt_s(res.duration_sim_s)} sim / {fmt_s(res.duration_wall_s)} "
-                       f"wall{err} — {res.detail}")
-        return res
-
-    def _progress(self, tag: str, state: str, detail: str, gt0: Any, t0: float) -> str:
-        p = parse_detail(detail)
-        left = f"{p.remaining_m:.2f} m left" if p.remaining_m is not None else "-"
-        eta = f"ETA {p.eta_s:.0f} s" if p.eta_s is not None else "ETA -"
-        last = self.rec.gt[-1] if self.rec.gt else None
-        sim = fmt_s(last.sim_time - gt0.sim_time) if (last is not None and gt0 is not None) else "-"
-        extra = f", {p.recoveries} recoveries" if p.recoveries else ""
-        blocked = ", blocked" if detail.endswith("blocked") else ""
-        return (f"{tag}: {state:<9} {left}, {eta}{extra}{blocked} | sim {sim}, "
-                f"wall {fmt_s(time.monotonic() - t0)}")
-
-    def _measure(self, res: GoalResult, gt0: Any, gt_mark: int, plan_mark: int) -> None:
-        gt1 = self.rec.sample()
-        end_gt, end_plan = self.rec.mark()
-        samples = ([gt0] if gt0 is not None else []) + self.rec.gt_between(gt_mark + 1, end_gt)
-        dense = self.rec.gt_path(gt0.sim_time, gt1.sim_time) if gt0 is not None and gt1 is not None else []
-        res.path_length_m = path_length(dense if len(dense) >= 2 else [(s.x, s.y) for s in samples])
-        if gt1 is not None:
-            res.final_pose = (gt1.x, gt1.y, gt1.theta)
-            res.final_error_m = math.hypot(gt1.x - res.goal.x, gt1.y - res.goal.y)
-            if gt0 is not None:
-                res.duration_sim_s = gt1.sim_time - gt0.sim_time
-        if gt0 is not None:
-            try:
-                res.collisions = [c.as_dict() for c in self.rpc.collisions(gt0.sim_time)]
-            except DemoError as exc:
-                self.rec.warnings.append(f"collisions: {exc}")
-        plan = self.rec.plan_for(plan_mark, end_plan, (res.goal.x, res.goal.y))
-        res.plan_length_m = path_length(plan.tolist()) if plan is not None else None
-        res.plan = plan
-
-
 # ---------------------------------------------------------------------- the command
 
 
@@ -250,6 +160,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
         env["ROS_DOMAIN_ID"] = str(pick_domain_id())
     domain = int(env["ROS_DOMAIN_ID"])
     deploy = load_deploy(deploy_path, base_env=env)  # ManifestProblems -> exit 2, nothing started
+    if args.rtf == 0 or args.rtf > 8:
+        print(f"note: --rtf {args.rtf:g} can outrun SLAM + navigation on a small machine (runs then fail with "
+              "'TF map→base_link is stale'); 3-6 is reliable", file=sys.stderr)
     names = [e.name for e in deploy.entries if e.kind != "skill"]
     out.mkdir(parents=True, exist_ok=True)
 
@@ -274,6 +187,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
             line.done(f"system up in {time.monotonic() - t_start:.1f}s: {', '.join(names)} ACTIVE, atlas {atlas}")
             summary["atlas"] = atlas
             rpc = DemoRpc(atlas)
+            rec = Recorder(rpc, domain)
+            rec.start()
+            rec.wait_ready(20.0, stop.event)
             info = rpc.scene_info()
             gt = rpc.ground_truth()
             goals = choose_goals(info.get("waypoints") or {}, (gt.x, gt.y), args.goals, args.seed, MIN_GOAL_DIST_M)
@@ -282,8 +198,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
                                 f"{MIN_GOAL_DIST_M:g} m from the robot; pick another --scene")
             print(f"{len(goals)} goal(s) in scene {info.get('name')}: "
                   + ", ".join(f"{g.name} ({g.x:.2f}, {g.y:.2f})" for g in goals), flush=True)
-            rec = Recorder(rpc, domain)
-            rec.start()
             runner = GoalRunner(rpc, rec, boot, stop.event, args.timeout_per_goal, line)
             for i, g in enumerate(goals, 1):
                 if stop.event.is_set():

@@ -124,7 +124,7 @@ class BootChild:
                 bad = [n for n in names if states.get(n) in ("error", "terminated")]
                 if bad:
                     log = self.log_dir / f"{bad[0]}.log"
-                    raise DemoError(f"{bad[0]} is {states[bad[0]]} on the atlas (log {log})", tail(log, 15))
+                    raise DemoError(f"{bad[0]} went to state {states[bad[0]].upper()} (log {log})", tail(log, 15))
             if on_wait is not None:
                 on_wait(states)
             if time.monotonic() > deadline:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import sys
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,7 @@ class Recorder:
         self._thread = threading.Thread(target=self._run, name="rbnx-demo-recorder", daemon=True)
         self._node: Any = None
         self._tf: Any = None
+        self._plan_sub: Any = None
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -57,7 +59,7 @@ class Recorder:
 
             self._node = DdsNode(domain_id=self.domain_id, name="rbnx_demo")
             self._tf = TfBuffer(self._node)
-            self._node.create_subscription("/plan", PathMsg, self._on_plan, "reliable", 10)
+            self._plan_sub = self._node.create_subscription("/plan", PathMsg, self._on_plan, "reliable", 10)
             self._node.create_subscription("/map", OccupancyGrid, self._on_map, "latched", 1)
             self._node.create_subscription(self._gt_topic(), Odometry, self._on_gt_odom, "reliable", 50)
         except Exception as exc:  # noqa: BLE001 - DDS is optional for the demo: degrade, say so
@@ -65,6 +67,20 @@ class Recorder:
             print(f"warning: {self.warnings[-1]}", file=sys.stderr)
             self._close_dds()
         self._thread.start()
+
+    def wait_ready(self, timeout_s: float, stop: threading.Event) -> bool:
+        """Until TF map→base_link resolves and /plan is matched: the nav publishes a plan once per change on
+        a volatile topic, so a goal sent before DDS discovery finished would lose its first plan."""
+        if self._node is None:
+            return False
+        deadline = time.monotonic() + timeout_s
+        while not stop.is_set() and time.monotonic() < deadline:
+            if self.map_pose() is not None and self._plan_sub.matched_count() > 0:
+                return True
+            stop.wait(0.1)
+        self.warnings.append(f"DDS not ready after {timeout_s:g}s (TF map->base_link / /plan): "
+                             "trajectory or plan overlay may start late")
+        return False
 
     def stop(self) -> None:
         self._stop.set()
