@@ -94,7 +94,10 @@ class BridgeConfig(_M):
     dynamic_speed: DynamicSpeed = DynamicSpeed()
     robot_description: str = "config/panda_mobile.yaml"
     frames: Frames = Frames()
-    data_timeout_s: float = Field(1.0, gt=0)   # sim s without odom / fresh TF before a run fails
+    data_timeout_s: float = Field(1.0, gt=0)   # sim s without odom / fresh odom→base TF before a run fails
+    # map→odom is a slowly varying SLAM correction, republished on the SLAM provider's clock: at high
+    # real-time factors it can lag by seconds of sim time without being wrong, so it has its own limit.
+    map_tf_timeout_s: float = Field(10.0, gt=0)
     clock_stall_s: float = Field(0.5, gt=0)    # wall s without /clock advancing before the robot is stopped
     clock_timeout_s: float = Field(10.0, gt=0)  # wall s of a stalled /clock before a run fails
 
@@ -103,7 +106,7 @@ class BridgeConfig(_M):
     def _vel_topic(cls, v: str) -> str:
         return _topic(v)
 
-    @field_validator("action_wait_s", "data_timeout_s", "clock_stall_s", "clock_timeout_s")
+    @field_validator("action_wait_s", "data_timeout_s", "map_tf_timeout_s", "clock_stall_s", "clock_timeout_s")
     @classmethod
     def _finite(cls, v: float) -> float:
         if not math.isfinite(v):

@@ -31,7 +31,8 @@ Pose = tuple[float, float, float]
 class RobotState:
     pose: Pose                  # base in the map frame
     vel: Pose                   # body-frame twist from odometry
-    tf_age: float               # s (clock time) since the older of map→odom, odom→base
+    tf_age: float               # s (clock time) since the latest odom→base (must be fresh)
+    map_tf_age: float = 0.0     # s since the latest map→odom (a slow SLAM correction; may lag)
 
 
 class Inputs:
@@ -98,10 +99,12 @@ class Inputs:
         m_o = self.tf.lookup_transform(f.map, f.odom)
         o_b = self.tf.lookup_transform(f.odom, f.base)
         pose = compose(m_o.to_pose2d(), o_b.to_pose2d())
-        ages = [now - tr.stamp for tr in (m_o, o_b) if tr.stamp > 0.0]  # stamp 0: static links only
+        def age(tr: Any) -> float:
+            return max(0.0, now - tr.stamp) if tr.stamp > 0.0 else 0.0  # stamp 0: a static link
+
         with self._lock:
             vel = self.odom_vel
-        return RobotState((float(pose[0]), float(pose[1]), float(pose[2])), vel, max([0.0, *ages]))
+        return RobotState((float(pose[0]), float(pose[1]), float(pose[2])), vel, age(o_b), age(m_o))
 
     def core_scan(self, msg: LaserScan, robot: Pose) -> tuple[CoreScan, Pose] | None:
         """The scan for the costmaps and the laser's pose in map (base pose ∘ base→laser from TF)."""

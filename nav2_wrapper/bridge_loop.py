@@ -274,9 +274,11 @@ class NavLoop:
                 f = self.cfg.frames
                 return f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s"
             return ""
+        f = self.cfg.frames
         if state.tf_age > to:
-            f = self.cfg.frames
-            return f"TF {f.map}→{f.base} is stale ({state.tf_age:.1f} s old)"
+            return f"TF {f.odom}→{f.base} is stale ({state.tf_age:.1f} s old)"
+        if state.map_tf_age > self.cfg.map_tf_timeout_s:
+            return f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old; is the map provider running?)"
         return ""
 
     def _step(self, now: float) -> None:

@@ -117,9 +117,12 @@ def test_bad_goals_rejected_with_reason(system: System) -> None:
     r = system.navigate(3.0, 4.0, frame="odom")
     assert r.accepted and "goal (3.00, 4.00" in r.detail, r.detail
     assert system.cancel(r.run_id).accepted
+    t_cancel = system.gt().sim_time
     unknown = system.status("nav-doesnotexist")
     assert (unknown.known, unknown.state) == (False, "FAILED")
-    assert system.speed() < 0.02
+    # Under load the base may already be moving when cancel lands: stopped within 0.5 s of sim time.
+    g = wait_until(lambda: (x := system.gt()).sim_time >= t_cancel + 0.5 and x, 60, "0.5 s of sim time", 0.02)
+    assert math.hypot(g.vx, g.vy) < 0.03 and abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
 
 
 def test_preempt_then_cancel_stops_the_base(system: System) -> None:
