@@ -24,7 +24,7 @@ from robonix_api.geometry import compose, inverse, relative, transform_points
 from robonix_api.grid import GridMap
 
 from .lookup import LookupGrid
-from .matcher import MatchResult, match_scan, required_margin
+from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
 from .occupancy import OccupancyGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
 from .preprocess import ScanError, prepare_scan
@@ -72,6 +72,7 @@ class SlamEngine:
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
         self._running_built_at = 0
         self._last_loop_node = -10**9
+        self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
 
@@ -152,7 +153,12 @@ class SlamEngine:
             self.set_initial_pose(self.graph.poses[-1])
 
     def session(self) -> SessionData:
-        return SessionData(self.graph, np.asarray(self._odom).reshape(-1, 3), np.asarray(self._stamps, dtype=float),
+        """A snapshot: the graph is copied too, so a save written after the caller's lock is released stays
+        consistent while later scans add nodes (they did: 'could not broadcast (72,) into (73,)')."""
+        g = self.graph
+        graph = dataclasses.replace(g, poses=g.poses.copy(), edge_ij=list(g.edge_ij), edge_z=list(g.edge_z),
+                                    edge_info=list(g.edge_info), edge_kind=list(g.edge_kind))
+        return SessionData(graph, np.asarray(self._odom).reshape(-1, 3), np.asarray(self._stamps, dtype=float),
                            np.asarray(self._path, dtype=float), list(self._points),
                            np.asarray(self._origins).reshape(-1, 2), self.config)
 
@@ -344,29 +350,115 @@ class SlamEngine:
             return False
         cand = int(near[np.argmin(d[d <= c.loop_search_radius])])
         sub = old[np.hypot(*(poses[old, :2] - poses[cand, :2]).T) <= c.loop_submap_radius]
-        margin = required_margin(c.loop_search_window_xy, c.loop_coarse_factor, c.smear_sigma, c.resolution)
-        lookup = LookupGrid.from_points(self._node_points_map(sub), c.resolution, c.smear_sigma, margin,
-                                        center=poses[k], half_extent=c.max_range + c.loop_search_window_xy + 0.5)
-        m = self._match(lookup, self._points[k], poses[k], loop=True)
+        key = (tuple(int(i) for i in sub), self.stats.optimizations)
+        if self._loop_lookup is None or self._loop_lookup[0] != key:
+            # consecutive attempts usually see the same old submap: build its field (EDT) once
+            margin = required_margin(c.loop_search_window_xy, c.loop_coarse_factor, c.smear_sigma, c.resolution)
+            self._loop_lookup = (key, LookupGrid.from_points(self._node_points_map(sub), c.resolution,
+                                                             c.smear_sigma, margin))
+        lookup = self._loop_lookup[1]
+        pts = self._points[k]
+        # the wide correlative search only has to land in the right cell: half the beams suffice (the
+        # refinement and the verification below use all of them)
+        m = self._match(lookup, pts[::2] if len(pts) > 180 else pts, poses[k], loop=True)
         corr = float(np.hypot(*(m.pose[:2] - poses[k, :2])))
         limit = c.loop_max_correction + c.loop_max_correction_ratio * (path[k] - path[cand])
         at_edge = (abs(m.pose[0] - poses[k, 0]) > c.loop_search_window_xy - c.resolution
                    or abs(m.pose[1] - poses[k, 1]) > c.loop_search_window_xy - c.resolution
                    or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi)) > c.loop_search_window_theta - c.angular_step)
         if m.response < c.loop_min_response or corr > limit or at_edge:
-            self.stats.loop_rejected += 1
+            return self._reject_loop("response/window")
+        found = self._verified_loop(lookup, k, cand, m)
+        if found is None:
             return False
-        self.graph.add_edge(cand, k, relative(poses[cand], m.pose), _info_in_frame(m.covariance, poses[cand][2]),
-                            EDGE_LOOP)
+        pose, cov = found
+        self.graph.add_edge(cand, k, relative(poses[cand], pose), _info_in_frame(cov, poses[cand][2]), EDGE_LOOP)
+        saved = self.graph.poses.copy()
+        t0 = time.perf_counter()
+        res = self.graph.optimize(c.optimizer_iterations, huber=c.loop_huber or None)
+        elapsed = time.perf_counter() - t0
+        chi2 = float(self.graph.edge_chi2()[-1])
+        if chi2 > c.loop_max_chi2:  # the rest of the graph disagrees with it: drop it, undo the optimisation
+            self.graph.remove_last_edge()
+            self.graph.poses = saved
+            log.debug("slam: loop %d->%d removed after optimisation (chi2 %.1f)", cand, k, chi2)
+            return self._reject_loop("inconsistent after optimisation")
         self.stats.loop_closures += 1
         self._last_loop_node = k
-        self._optimize()
+        self._optimize((res, elapsed))
         return True
 
-    def _optimize(self) -> None:
-        t0 = time.perf_counter()
-        res = self.graph.optimize(self.config.optimizer_iterations)
-        self.optimize_times.append(time.perf_counter() - t0)
+    def _reject_loop(self, why: str) -> bool:
+        self.stats.loop_rejected += 1
+        # retry a few nodes later, not at every node: the search is the costliest step of the pipeline
+        self._last_loop_node = max(self._last_loop_node, self.graph.n_nodes - 1 - self.config.loop_cooldown_nodes
+                                   + self.config.loop_retry_nodes)
+        log.debug("slam: loop closure rejected: %s", why)
+        return False
+
+    def _verified_loop(self, lookup: LookupGrid, k: int, cand: int, m: MatchResult
+                       ) -> tuple[NDArray, NDArray] | None:
+        """Precise pose of node ``k`` against the old submap and an honest covariance, or None.
+
+        A loop edge is far stronger evidence than one sequential edge, so it must be right to within the
+        chain's own accuracy. Three checks, each cheap next to the correlative search: (1) re-fit with
+        more point-to-line rounds; (2) most endpoints must land on old obstacles (the views overlap,
+        not just "score well"); (3) the reverse match (the old node's scan into the *current* local
+        submap) must imply the same relative pose. The covariance is floored: never tighter than
+        ``loop_sigma_floor_*`` in any direction.
+        """
+        c = self.config
+        pts = self._points[k]
+        pose, cov = refine_pose(lookup, pts, m.pose, max_shift=2.0 * c.resolution, max_rot=2.0 * c.angular_step,
+                                sigma=c.smear_sigma)
+        if cov is None or not np.all(np.isfinite(cov)):
+            self._reject_loop("refinement failed")
+            return None
+        if inlier_fraction(lookup, pts, pose, c.loop_inlier_distance) < c.loop_min_inlier_fraction:
+            self._reject_loop("overlap")
+            return None
+        if c.loop_verify and not self._reverse_agrees(k, cand, pose):
+            self._reject_loop("reverse match")
+            return None
+        cov = 0.5 * (cov + cov.T)
+        floor = np.array([c.loop_sigma_floor_xy, c.loop_sigma_floor_xy, c.loop_sigma_floor_theta]) ** 2
+        ev, evec = np.linalg.eigh(cov[:2, :2])  # floor the translational ellipse in every direction
+        cov[:2, :2] = evec @ np.diag(np.maximum(ev, floor[0])) @ evec.T
+        cov[2, 2] = max(cov[2, 2], floor[2])
+        return pose, cov
+
+    def _reverse_agrees(self, k: int, cand: int, pose_k: NDArray) -> bool:
+        """Match the candidate's scan into a submap of the nodes just before ``k``, seeded where the
+        forward match puts it; both directions must give the same relative pose."""
+        c = self.config
+        poses = self.graph.poses
+        z = relative(pose_k, poses[cand])  # candidate in the frame of node k, per the forward match
+        seed = compose(poses[k], z)
+        nodes = range(max(0, k - c.running_buffer_size), k + 1)
+        cur = transform_points(seed, self._points[cand])
+        lo, hi = cur.min(axis=0), cur.max(axis=0)
+        wxy, wth = 2 * c.loop_verify_xy, 2 * c.loop_verify_theta
+        margin = required_margin(wxy, c.coarse_factor, c.smear_sigma, c.resolution)
+        local = LookupGrid.from_points(self._node_points_map(nodes), c.resolution, c.smear_sigma, margin,
+                                       center=0.5 * (lo + hi), half_extent=float(np.max(hi - lo)) / 2 + wxy + 0.2)
+        r = match_scan(local, self._points[cand], seed, window_xy=wxy, window_theta=wth,
+                       angular_step=c.angular_step, coarse_factor=c.coarse_factor, refine=False,
+                       sigma=c.smear_sigma, penalty=0.0)
+        back, _ = refine_pose(local, self._points[cand], r.pose, max_shift=2.0 * c.resolution,
+                              max_rot=2.0 * c.angular_step, sigma=c.smear_sigma)
+        if inlier_fraction(local, self._points[cand], back, c.loop_inlier_distance) < c.loop_min_inlier_fraction:
+            return False
+        d = relative(seed, back)
+        return bool(math.hypot(d[0], d[1]) <= c.loop_verify_xy and abs(d[2]) <= c.loop_verify_theta)
+
+    def _optimize(self, done: tuple[OptimizeResult, float] | None = None) -> None:
+        """Optimise (unless ``done`` = (result, seconds) says it just was) and re-render the nodes that moved."""
+        if done is None:
+            t0 = time.perf_counter()
+            res = self.graph.optimize(self.config.optimizer_iterations, huber=self.config.loop_huber or None)
+            done = (res, time.perf_counter() - t0)
+        res = done[0]
+        self.optimize_times.append(done[1])
         self.last_optimize = res
         self.stats.optimizations += 1
         k = self.graph.n_nodes - 1

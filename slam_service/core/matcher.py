@@ -82,24 +82,29 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     bounds *= prior(np.arange(len(th))[:, None], near_y[None, :], near_x[None, :])
 
     fine = lookup.data.ravel()
+    # fine offsets of every block, padded to f x f (cells past the window repeat the block's first cell)
+    cy = np.minimum(by.ravel()[:, None] + np.arange(f)[None, :], w)  # (B, f)
+    cx = np.minimum(bx.ravel()[:, None] + np.arange(f)[None, :], w)
+    gy_all = np.repeat(cy, f, axis=1)  # (B, f*f)
+    gx_all = np.tile(cx, (1, f))
+    off_all = gy_all * wd + gx_all
     order = np.argsort(bounds, axis=None)[::-1]
+    flat_bounds = bounds.ravel()
     best = (-1.0, 0, 0, 0, 0.0)
     refined = 0
-    for k in order:
-        t, b = divmod(int(k), len(block_off))
-        if bounds[t, b] <= best[0]:
+    batch = 8  # blocks scored per numpy call: amortises Python overhead, rarely scores needless blocks
+    for start in range(0, len(order), batch):
+        ks = order[start:start + batch]
+        ks = ks[flat_bounds[ks] > best[0]]
+        if len(ks) == 0:
             break
-        y0, x0 = int(by.ravel()[b]), int(bx.ravel()[b])
-        ys = np.arange(y0, min(y0 + f, w + 1))
-        xs = np.arange(x0, min(x0 + f, w + 1))
-        gy, gx = np.meshgrid(ys, xs, indexing="ij")
-        off = (gy * wd + gx).ravel()
-        raw = fine[flat[t][:, None] + off[None, :]].sum(axis=0) / n
-        sc = raw * prior(t, gy.ravel(), gx.ravel())
-        j = int(np.argmax(sc))
-        refined += 1
-        if sc[j] > best[0]:
-            best = (float(sc[j]), t, int(gy.ravel()[j]), int(gx.ravel()[j]), float(raw[j]))
+        t, b = np.divmod(ks, len(block_off))
+        raw = fine[flat[t][:, :, None] + off_all[b][:, None, :]].sum(axis=1) / n  # (K, f*f)
+        sc = raw * prior(t[:, None], gy_all[b], gx_all[b])
+        refined += len(ks)
+        kb, j = np.unravel_index(int(np.argmax(sc)), sc.shape)
+        if sc[kb, j] > best[0]:
+            best = (float(sc[kb, j]), int(t[kb]), int(gy_all[b[kb], j]), int(gx_all[b[kb], j]), float(raw[kb, j]))
     _, t_best, dy_best, dx_best, score = best
 
     # covariance from the score distribution around the peak (Olson-style, within +-2 steps)
@@ -128,6 +133,30 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
             cov = icp_cov + np.diag([0.005**2, 0.005**2, 0.001**2])
     pose[2] = math.remainder(pose[2], 2 * math.pi)
     return MatchResult(pose, float(score), cov, n, refined)
+
+
+def refine_pose(lookup: LookupGrid, points: NDArray, pose: NDArray, *, max_shift: float, max_rot: float,
+                sigma: float, rounds: int = 4, iterations: int = 4) -> tuple[NDArray, NDArray | None]:
+    """Point-to-line polish of an already-matched pose with more correspondence rounds than the
+    sequential path: loop closures start further from the optimum and need the extra precision."""
+    return _refine(lookup, np.asarray(points, dtype=np.float64), np.asarray(pose, dtype=np.float64).copy(),
+                   max_shift=max_shift, max_rot=max_rot, sigma=sigma, rounds=rounds, iterations=iterations)
+
+
+def inlier_fraction(lookup: LookupGrid, points: NDArray, pose: NDArray, tolerance: float) -> float:
+    """Fraction of beam endpoints within ``tolerance`` of a map obstacle point at ``pose``.
+
+    The correlative response is a smooth score: a scan half of which sees structure the map lacks can
+    still score 0.7 while its fitted pose is centimetres off. Requiring most endpoints to land on the
+    map is a direct test that the two views really overlap.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) == 0:
+        return 0.0
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    q = pts @ np.array([[c, s], [-s, c]]) + np.asarray(pose[:2], dtype=np.float64)
+    d, _ = lookup.kdtree().query(q, k=1, distance_upper_bound=tolerance)
+    return float(np.isfinite(d).mean())
 
 
 def _refine(lookup: LookupGrid, pts: NDArray, pose: NDArray, *, max_shift: float,
@@ -184,7 +213,7 @@ def _refine(lookup: LookupGrid, pts: NDArray, pose: NDArray, *, max_shift: float
             if weak.any():
                 step -= evec[:, weak] @ (evec[:, weak].T @ step)
             var = float((w * r * r).sum() / w.sum())
-            cov = COV_INFLATION * max(var, 1e-6) * np.linalg.inv(hess)
+            cov = COV_INFLATION * max(var, 1e-6) * (evec / ev) @ evec.T  # = var x H^-1 (eigh already done)
             nxp = x + step
             if abs(nxp[0] - p0[0]) > max_shift or abs(nxp[1] - p0[1]) > max_shift or abs(nxp[2] - p0[2]) > max_rot:
                 return x, cov

@@ -74,6 +74,17 @@ class SlamConfig:
     loop_max_correction: float = 1.5  # consistency: largest accepted correction (m) ...
     loop_max_correction_ratio: float = 0.15  # ... plus this fraction of the chain distance
     loop_cooldown_nodes: int = 8  # nodes between loop-closure attempts after a success
+    loop_retry_nodes: int = 2  # ... and after a rejected attempt
+    # loop-closure verification: a closure is added only if it is precise, never "probably right"
+    loop_inlier_distance: float = 0.05  # an endpoint is an inlier within this distance of the old submap (m)
+    loop_min_inlier_fraction: float = 0.8  # ... and this fraction of endpoints must be inliers (overlap test)
+    loop_verify: bool = True  # reverse match: the old node's scan into the current local submap must agree
+    loop_verify_xy: float = 0.03  # largest forward/reverse disagreement (m) ...
+    loop_verify_theta: float = 0.015  # ... and (rad)
+    loop_sigma_floor_xy: float = 0.01  # loop edges are never trusted more than this (m) ...
+    loop_sigma_floor_theta: float = 0.005  # ... and (rad): conservative next to the scan-matching chain
+    loop_huber: float = 3.0  # Huber kernel on loop edges in the optimiser (standard deviations); 0 = off
+    loop_max_chi2: float = 16.0  # a new loop edge still this inconsistent after optimisation is removed
     optimizer_iterations: int = 15
     re_render_threshold: float = 0.02  # re-render a node's scan when it moved more than this (m, at max range)
     # occupancy grid (log-odds)
@@ -94,7 +105,8 @@ class SlamConfig:
     def __post_init__(self) -> None:
         positive = ("resolution", "max_range", "search_window_xy", "search_window_theta", "angular_step",
                     "smear_sigma", "loop_search_radius", "loop_submap_radius", "loop_search_window_xy",
-                    "loop_search_window_theta", "log_odds_hit", "log_odds_max", "max_odom_jump_distance",
+                    "loop_search_window_theta", "loop_inlier_distance", "loop_verify_xy",
+                    "loop_verify_theta", "loop_sigma_floor_xy", "loop_sigma_floor_theta", "log_odds_hit", "log_odds_max", "max_odom_jump_distance",
                     "max_odom_jump_heading", "odom_sigma_xy", "odom_sigma_theta")
         for f in fields(self):
             v = getattr(self, f.name)
@@ -105,8 +117,8 @@ class SlamConfig:
             if f.name in positive and v <= 0:
                 raise ValueError(f"SlamConfig.{f.name} must be > 0, got {v!r}")
         for name in ("min_travel_distance", "min_travel_heading", "loop_min_chain_distance",
-                     "loop_max_correction", "loop_max_correction_ratio", "loop_cooldown_nodes",
-                     "re_render_threshold"):
+                     "loop_max_correction", "loop_max_correction_ratio", "loop_cooldown_nodes", "loop_retry_nodes",
+                     "re_render_threshold", "loop_huber", "loop_max_chi2"):
             if getattr(self, name) < 0:
                 raise ValueError(f"SlamConfig.{name} must be >= 0, got {getattr(self, name)!r}")
         for name in ("coarse_factor", "loop_coarse_factor", "running_buffer_size", "lookup_rebuild_nodes", "grid_chunk",
@@ -115,7 +127,7 @@ class SlamConfig:
             if int(v) != v or v < 1:
                 raise ValueError(f"SlamConfig.{name} must be a positive integer, got {v!r}")
             setattr(self, name, int(v))
-        for name in ("min_response", "loop_min_response", "match_penalty"):
+        for name in ("min_response", "loop_min_response", "match_penalty", "loop_min_inlier_fraction"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"SlamConfig.{name} must be in [0, 1], got {getattr(self, name)!r}")
         if self.log_odds_miss >= 0:
