@@ -19,14 +19,19 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from hal_panda_mobile.sim import LidarNoise  # noqa: E402
 from robonix_eval.goals import sample_goals  # noqa: E402
-from robonix_eval.pipeline import Pipeline, PipelineOptions  # noqa: E402
+from robonix_eval.pipeline import GoalResult, Pipeline, PipelineOptions  # noqa: E402
+from robonix_eval.slam_loop import ROUTES  # noqa: E402
 
 SCENES = ("apartment", "office", "warehouse", "kitchen")
 
 
-def run_scene(scene: str, n: int, seed: int) -> dict:
-    pipe = Pipeline(PipelineOptions(scene=scene, seed=seed))
+def run_scene(scene: str, n: int, seed: int, lidar: LidarNoise | None = None) -> dict:
+    opts = PipelineOptions(scene=scene, seed=seed)
+    if lidar is not None:
+        opts = PipelineOptions(scene=scene, seed=seed, lidar_noise=lidar)
+    pipe = Pipeline(opts)
     goals = sample_goals(pipe.sim, n, seed=seed)
     t0 = time.perf_counter()
     results = pipe.run_goals(goals)
@@ -49,21 +54,50 @@ def run_scene(scene: str, n: int, seed: int) -> dict:
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--goals", type=int, default=10)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--scenes", nargs="*", default=list(SCENES))
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "nav_suite.json"))
-    args = ap.parse_args()
-    rows = [run_scene(s, args.goals, args.seed) for s in args.scenes]
+def run_hard(seed: int) -> list[dict]:
+    """The scenarios that used to fail: the apartment route (narrow doorways) on the ground-truth map with
+    2–3 cm lidar noise and dropouts, and a 0.8 m gap beside a box dropped 1.5 m ahead in the office corridor."""
+    out = []
+    for std, drop in ((0.02, 0.02), (0.03, 0.05)):
+        pipe = Pipeline(PipelineOptions(scene="apartment", seed=seed, nav_map="ground_truth",
+                                        lidar_noise=LidarNoise(noise_std=std, dropout_prob=drop)))
+        wps = pipe.sim.scene.waypoints
+        res = pipe.run_goals([(float(wps[n][0]), float(wps[n][1]), 0.0) for n in ROUTES["apartment"]])
+        out.append(_hard_row(f"apartment route, noise {std} m / dropout {drop}", res))
+    for side, y, std in (("south", 5.6, 0.01), ("north", 6.4, 0.03)):
+        pipe = Pipeline(PipelineOptions(scene="office", seed=seed,
+                                        lidar_noise=LidarNoise(noise_std=std, dropout_prob=0.02)))
+        box, dropped = (8.0, y, 0.6, 1.1), []
+
+        def drop_box(p: Pipeline, box: tuple = box, dropped: list = dropped) -> None:
+            if not dropped and p.ground_truth_pose()[0] > box[0] - 1.5:
+                p.sim.spawn_box("dropped", *box)
+                dropped.append(p.time)
+
+        pipe.hooks.append(drop_box)
+        out.append(_hard_row(f"0.8 m gap ({side} box), noise {std} m", pipe.run_goals([(14.5, 6.0, 0.0)])))
+    print(f"{'hard scenario':<44} {'succ':>5} {'coll':>4} {'rec':>3}")
+    for r in out:
+        print(f"{r['scenario']:<44} {r['succeeded']:>2}/{r['goals']:<2} {r['collisions']:>4} {r['recoveries']:>3}")
+    return out
+
+
+def _hard_row(name: str, res: list[GoalResult]) -> dict:
+    return {"scenario": name, "goals": len(res), "succeeded": sum(r.succeeded for r in res),
+            "collisions": sum(r.collisions for r in res), "recoveries": sum(r.recoveries for r in res),
+            "results": [r.to_dict() for r in res]}
+
+
+def _table(rows: list[dict]) -> dict:
+    """Print one pass's per-scene table and return its overall figures with the rows."""
     n = sum(r["goals"] for r in rows)
     overall = {"goals": n, "succeeded": sum(r["succeeded"] for r in rows),
                "success_rate": sum(r["succeeded"] for r in rows) / n,
                "collisions": sum(r["collisions"] for r in rows),
+               "recoveries": sum(r["recoveries"] for r in rows),
                "path_ratio_median": statistics.median(
-                   x["path_ratio"] for r in rows for x in r["results"]
-                   if x["state"] == "SUCCEEDED" and math.isfinite(x["path_ratio"])),
+                   [x["path_ratio"] for r in rows for x in r["results"]
+                    if x["state"] == "SUCCEEDED" and math.isfinite(x["path_ratio"])] or [math.nan]),
                "plan_ms_median": statistics.median(r["plan_ms_median"] for r in rows)}
     print(f"{'scene':<10} {'succ':>6} {'coll':>4} {'in tol':>6} {'t med s':>7} {'path/short':>10} "
           f"{'max':>5} {'plan ms':>7} {'rec':>3} {'x RT':>5}")
@@ -72,12 +106,38 @@ def main() -> None:
               f"{r['time_s_median']:>7.1f} {r['path_ratio_median']:>10.2f} {r['path_ratio_max']:>5.2f} "
               f"{r['plan_ms_median']:>7.1f} {r['recoveries']:>3} {r['real_time_factor']:>5.1f}")
     print(f"{'overall':<10} {overall['succeeded']:>3}/{n:<2} {overall['collisions']:>4} {'':>6} {'':>7} "
-          f"{overall['path_ratio_median']:>10.2f} {'':>5} {overall['plan_ms_median']:>7.1f}")
+          f"{overall['path_ratio_median']:>10.2f} {'':>5} {overall['plan_ms_median']:>7.1f} "
+          f"{overall['recoveries']:>3}")
+    return {"overall": overall, "scenes": rows}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--goals", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--scenes", nargs="*", default=list(SCENES))
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "nav_suite.json"))
+    ap.add_argument("--lidar-noise", nargs=2, type=float, metavar=("STD_M", "DROPOUT"), default=None,
+                    help="also run a second pass with this lidar range noise (m) and dropout probability, "
+                         "e.g. 0.03 0.05")
+    ap.add_argument("--no-hard", action="store_true", help="skip the hard scenarios (noisy route, 0.8 m gap)")
+    args = ap.parse_args()
+    passes = {"nominal": None}
+    if args.lidar_noise:
+        passes["noisy"] = LidarNoise(noise_std=args.lidar_noise[0], dropout_prob=args.lidar_noise[1])
+    report = {}
+    for label, lidar in passes.items():
+        rows = [run_scene(s, args.goals, args.seed, lidar) for s in args.scenes]
+        print(f"== {label}" + (f": lidar noise {lidar.noise_std} m, dropout {lidar.dropout_prob}" if lidar else ""))
+        report[label] = {"lidar_noise": lidar.model_dump() if lidar else None, **_table(rows)}
+    hard = [] if args.no_hard else run_hard(args.seed)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    nominal = report["nominal"]
     out.write_text(json.dumps({"bench": "nav_suite", "seed": args.seed, "machine": platform.machine(),
-                               "python": platform.python_version(), "overall": overall, "scenes": rows},
-                              indent=2, default=float))
+                               "python": platform.python_version(), "overall": nominal["overall"],
+                               "scenes": nominal["scenes"], "passes": report,
+                               "hard": hard}, indent=2, default=float))
     print(f"wrote {out}")
 
 

@@ -128,6 +128,8 @@ class ControllerPluginParams(_P):
     allow_reversed_heading: bool = True
     rotate_to_goal_dist: float = Field(0.5, ge=0)
     collision_check_time: float = Field(1.0, gt=0)
+    tight_clearance: float = Field(0.15, ge=0)      # m beyond the circumscribed radius = narrow passage
+    passage_lookahead: float = Field(1.0, ge=0)     # m of path searched for a narrow passage
 
 
 class CostmapParams(_Node):

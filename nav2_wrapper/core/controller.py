@@ -1,6 +1,12 @@
 """Local controller for a holonomic base: regulated pure pursuit in (vx, vy) with heading alignment in wz,
 plus a small fallback sampler checked against the footprint on the local costmap.
 
+Heading: in open space the body turns toward the path direction at the carrot; in a narrow passage ahead it
+lines up with the passage instead (the yaw that fits the footprint best at the tightest path point), since a
+0.7 × 0.5 m body held diagonally needs ~0.8 m. Candidates are simulated as the pursuit executes them (fixed
+world-frame translation, rotation that stops at its target), and lethal cells the outline already touches are
+forgiven rather than counted, so a noise speckle on the outline cannot veto every command.
+
 Why pursuit + fallbacks rather than a full DWB/MPPI sampler: a holonomic base can translate toward the
 carrot directly, so the only choices that matter are how fast and whether rotating is safe right now; a
 handful of candidates covers them in well under a millisecond.
@@ -45,6 +51,10 @@ class ControllerConfig:
     allow_reversed_heading: bool = True        # front/back-symmetric footprint: align either end with the path
     rotate_to_goal_dist: float = 0.5           # m: within this of the goal, turn toward the goal yaw
     collision_check_time: float = 1.0          # s of forward simulation per candidate
+    tight_clearance: float = 0.15              # m beyond the circumscribed radius: closer obstacles = tight space
+    dense_time: float = 0.25                  # s simulated finely (what runs before the next check)
+    footprint_check_resolution: float = 0.05   # m; the costmap cell size the dense sampling resolves
+    passage_lookahead: float = 1.0             # m of path searched for a narrow passage to line the body up with
     sim_dt: float = 0.1
     footprint: Footprint = field(default_factory=Footprint.from_robot_yaml)
 
@@ -115,18 +125,17 @@ class HolonomicController:
         carrot = self.path[i + int(far[0])] if len(far) else self.path[-1]
         dgoal = math.hypot(goal[0] - x, goal[1] - y)
         to_end = not len(far)
-        # --- heading target
-        if xy_reached or dgoal < c.rotate_to_goal_dist:
-            yaw_target = goal[2]
+        # --- heading targets: the path's direction at the carrot, and along the stretch the body covers now
+        goal_yaw = xy_reached or dgoal < c.rotate_to_goal_dist
+        far_yaw = self._path_yaw(i + int(far[0]) if len(far) else len(self.path) - 1, 0.15, th)
+        near_yaw = self._path_yaw(i, self._half_length, th, ahead=True)
+        if goal_yaw:
+            targets = [goal[2]]
         else:
-            j = min(i + int(far[0]) if len(far) else len(self.path) - 1, len(self.path) - 1)
-            k = max(j - 3, 0)
-            seg = self.path[j] - self.path[k]
-            yaw_target = math.atan2(seg[1], seg[0]) if np.hypot(*seg) > 1e-6 else th
-        err = float(wrap_angle(yaw_target - th))
-        if c.allow_reversed_heading and not (xy_reached or dgoal < c.rotate_to_goal_dist) and abs(err) > math.pi / 2:
-            err = float(wrap_angle(err + math.pi))
-        wz = float(np.clip(c.rotation_gain * err, -c.max_vel_theta, c.max_vel_theta)) * self.speed_limit
+            passage = self._passage_yaw(i, th, costmap)
+            order = (passage, near_yaw, far_yaw) if passage is not None else (far_yaw, near_yaw)
+            targets = [self._nearest_end(t, th) for t in order]
+        err = float(wrap_angle(targets[0] - th))
         # --- translational speed
         v = c.desired_linear_vel * self.speed_limit
         if remaining < c.approach_velocity_scaling_dist:
@@ -147,13 +156,183 @@ class HolonomicController:
             v = min(v, 0.5 * float(np.hypot(*aim)))
         n = float(np.hypot(*aim))
         vm = aim / n * v if n > 1e-9 else np.zeros(2)
-        cs, sn = math.cos(th), math.sin(th)
-        vx, vy = cs * vm[0] + sn * vm[1], -sn * vm[0] + cs * vm[1]
-        lim = max(abs(vx) / (c.max_vel_x * self.speed_limit), abs(vy) / (c.max_vel_y * self.speed_limit), 1.0)
-        vx, vy = vx / lim, vy / lim
-        vx, vy, wz = self._accel_limit((vx, vy, wz), vel, dt)
-        cmd, blocked = self._collision_free((vx, vy, wz), pose, costmap)
+        cmd, blocked = self._choose(vm, targets, pose, vel, costmap, dt)
         return ControlOutput(*cmd, blocked, remaining, "")
+
+    # ---- heading helpers -----------------------------------------------------------------------------
+    @property
+    def _half_length(self) -> float:
+        return float(np.max(np.abs(self.cfg.footprint.polygon[:, 0])))
+
+    def _path_yaw(self, j: int, span: float, default: float, ahead: bool = False) -> float:
+        """Direction of the path over ``span`` m ending at index j (or, ahead=True, starting at j)."""
+        j = min(max(j, 0), len(self.path) - 1)
+        if ahead:
+            k = min(int(np.searchsorted(self._cum, self._cum[j] + span)), len(self.path) - 1)
+            seg = self.path[k] - self.path[j]
+        else:
+            k = max(int(np.searchsorted(self._cum, self._cum[j] - span)) - 1, 0)
+            seg = self.path[j] - self.path[k]
+        return math.atan2(seg[1], seg[0]) if float(np.hypot(*seg)) > 1e-6 else default
+
+    def _nearest_end(self, yaw: float, th: float) -> float:
+        """With a front/back-symmetric footprint either end may lead: the target closer to the heading now."""
+        if self.cfg.allow_reversed_heading and abs(float(wrap_angle(yaw - th))) > math.pi / 2:
+            return float(wrap_angle(yaw + math.pi))
+        return yaw
+
+    def _passage_yaw(self, i: int, th: float, costmap: Costmap) -> float | None:
+        """In a narrow passage on the next stretch of path, the heading whose footprint fits it best.
+
+        A holonomic base need not face where the path goes next: placed at the tightest path point ahead, the
+        heading (near the path tangent there) with the fewest lethal contacts and least cost is the one that
+        minimises the body's cross-section across the passage; holding it until the passage is behind is what
+        gets a 0.5 m wide robot through a 0.8 m gap or a doorway entered at an angle. None in open space."""
+        c = self.cfg
+        k = int(np.searchsorted(self._cum, self._cum[i] + c.passage_lookahead)) + 1
+        pts = self.path[i:k]
+        cost = costmap.cost_at(pts[:, 0], pts[:, 1], outside=0).astype(int)
+        cost[cost == NO_INFORMATION] = 0
+        j = int(np.argmax(cost))
+        clear = distance_from_cost(int(cost[j]), costmap.cfg.footprint.inscribed_radius,
+                                   costmap.cfg.cost_scaling_factor)
+        if clear >= c.footprint.circumscribed_radius + c.tight_clearance:
+            return None
+        tangent = self._path_yaw(max(int(np.searchsorted(self._cum, self._cum[i + j] - self._half_length)), 0),
+                                 2 * self._half_length, th, ahead=True)
+        yaws = tangent + np.radians(np.arange(-40.0, 41.0, 10.0))
+        poses = np.column_stack([np.full(len(yaws), pts[j, 0]), np.full(len(yaws), pts[j, 1]), yaws])
+        fc = costmap.footprint_costs(poses, self._points, outside=0).astype(float)
+        fc[fc == NO_INFORMATION] = 0.0
+        score = 1e4 * (fc == LETHAL).sum(axis=1) + fc.sum(axis=1) + np.abs(yaws - tangent)  # ties → tangent
+        return float(yaws[int(np.argmin(score))])
+
+    # ---- command selection ---------------------------------------------------------------------------
+    def _wz_toward(self, target: float, th: float) -> float:
+        err = float(wrap_angle(target - th))
+        return float(np.clip(self.cfg.rotation_gain * err, -self.cfg.max_vel_theta, self.cfg.max_vel_theta)) * \
+            self.speed_limit
+
+    def _choose(self, vm: NDArray[np.float64], targets: list[float], pose: tuple[float, float, float],
+                vel: tuple[float, float, float], costmap: Costmap,
+                dt: float) -> tuple[tuple[float, float, float], bool]:
+        """The first safe candidate in order of preference; candidates are simulated the way the pursuit
+        will actually execute them (fixed world-frame translation, rotation that stops at its target), so a
+        turn toward a heading is not mistaken for a sweeping arc.
+
+        Preference: full speed toward each heading target, then without turning, then slower, then turning in
+        place; finally an escape move that backs away from lethal cells the footprint already touches."""
+        th = pose[2]
+        cs, sn = math.cos(th), math.sin(th)
+        # the acceleration-limited command toward the preferred heading defines the speed actually available
+        vx, vy = cs * vm[0] + sn * vm[1], -sn * vm[0] + cs * vm[1]
+        lim = max(abs(vx) / (self.cfg.max_vel_x * self.speed_limit),
+                  abs(vy) / (self.cfg.max_vel_y * self.speed_limit), 1.0)
+        vx, vy, wz0 = self._accel_limit((vx / lim, vy / lim, self._wz_toward(targets[0], th)), vel, dt)
+        vw = np.array([cs * vx - sn * vy, sn * vx + cs * vy])
+        rot = [(self._wz_toward(t, th), float(wrap_angle(t - th))) for t in dict.fromkeys(targets)]
+        rot[0] = (wz0, rot[0][1])
+        cands: list[tuple[float, float, float, float]] = []   # world vx, vy, wz, rotation to do (rad)
+        for scale in (1.0, 0.5, 0.25):
+            w = vw * scale
+            if float(np.hypot(*w)) < 1e-6:
+                continue
+            cands += [(w[0], w[1], wz, turn) for wz, turn in rot]
+            cands.append((w[0], w[1], 0.0, 0.0))
+        cands += [(0.0, 0.0, wz, turn) for wz, turn in rot if abs(wz) > 1e-6]
+        if not cands:
+            return (0.0, 0.0, 0.0), False
+        arr = np.array(cands)
+        ok = ~self.world_trajectory_hits(arr, pose, costmap)
+        if ok.any():
+            k = int(np.argmax(ok))
+            wxv, wyv, wz, _ = cands[k]
+            return (cs * wxv + sn * wyv, -sn * wxv + cs * wyv, wz), False
+        esc = self._escape(pose, vm, targets[0], costmap)
+        if esc is not None:
+            wxv, wyv, wz = esc
+            return (cs * wxv + sn * wyv, -sn * wxv + cs * wyv, wz), False
+        return (0.0, 0.0, 0.0), True
+
+    def _escape(self, pose: tuple[float, float, float], aim: NDArray[np.float64], target: float,
+                costmap: Costmap) -> tuple[float, float, float] | None:
+        """When nothing else is safe but the body is turned away from the heading it needs: a slow translation
+        while turning to that heading that adds no lethal contact, preferring the direction of travel. It gets
+        the body out of spots where neither turning in place nor going on fits (a doorway entered at an angle).
+        None if the heading is already right (then only replanning or a recovery can help) or nothing fits."""
+        turn = float(wrap_angle(target - pose[2]))
+        if abs(turn) < 0.05:
+            return None
+        speed = 0.1
+        wz = self._wz_toward(target, pose[2])
+        cands = np.array([(speed * math.cos(a), speed * math.sin(a), wz, turn)
+                          for a in np.linspace(-math.pi, math.pi, 16, endpoint=False)])
+        ok = ~self.world_trajectory_hits(cands, pose, costmap)
+        if not ok.any():
+            return None
+        n = float(np.hypot(*aim))
+        pref = cands[:, :2] @ (aim / n) if n > 1e-9 else np.zeros(len(cands))
+        k = int(np.argmax(np.where(ok, pref, -np.inf)))
+        return float(cands[k, 0]), float(cands[k, 1]), float(cands[k, 2])
+
+    def _lethal_cells(self, poses: NDArray[np.float64], costmap: Costmap) -> list[set[int]]:
+        """Per pose, the flat indices of the lethal cells the footprint outline touches."""
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        px = poses[:, 0:1] + c * self._points[None, :, 0] - s * self._points[None, :, 1]
+        py = poses[:, 1:2] + s * self._points[None, :, 0] + c * self._points[None, :, 1]
+        col, row = costmap.world_to_cell(px, py)
+        inb = costmap.in_bounds(col, row)
+        out = []
+        for k in range(len(poses)):
+            m = inb[k]
+            cells = row[k][m] * costmap.shape[1] + col[k][m]
+            out.append({int(v) for v in cells[costmap.costs.flat[cells] == LETHAL]})
+        return out
+
+    def world_trajectory_hits(self, cands: NDArray[np.float64], pose: tuple[float, float, float],
+                              costmap: Costmap, horizon: float | None = None) -> NDArray[np.bool_]:
+        """For candidates (K, 4) = world-frame (vx, vy), wz and the rotation after which turning stops, whether
+        the simulated footprint touches a lethal cell it does not already touch at the start (those are
+        forgiven: the robot cannot do better than not adding contacts, and they are usually noise speckles)."""
+        c = self.cfg
+        horizon = c.collision_check_time if horizon is None else horizon
+        t = self._sample_times(cands[:, :2], cands[:, 2], horizon)
+        steps = len(t)
+        turn = np.abs(cands[:, 3:4])
+        dth = np.sign(cands[:, 2:3]) * np.minimum(np.abs(cands[:, 2:3]) * t[None, :], np.maximum(turn, 0.0))
+        dth = np.where(turn > 0, dth, cands[:, 2:3] * t[None, :])
+        poses = np.stack([pose[0] + cands[:, 0:1] * t[None, :], pose[1] + cands[:, 1:2] * t[None, :],
+                          pose[2] + dth], axis=-1)
+        return self._new_contacts(poses.reshape(-1, 3), pose, costmap).reshape(len(cands), steps).any(axis=1)
+
+    def _sample_times(self, v: NDArray[np.float64], wz: NDArray[np.float64], horizon: float) -> NDArray[np.float64]:
+        """Simulation times: every ``sim_dt`` to the horizon, and densely over the first ``dense_time`` — the part
+        executed before the next check — so that no outline point moves more than half a cell between samples
+        (a corner must not tunnel through a cell between two checks)."""
+        c = self.cfg
+        coarse = np.arange(1, max(1, int(math.ceil(horizon / c.sim_dt))) + 1) * c.sim_dt
+        speed = float(np.max(np.hypot(v[:, 0], v[:, 1]) + np.abs(wz) * c.footprint.circumscribed_radius, initial=0.0))
+        if speed <= 1e-9:
+            return coarse
+        ds = min(c.sim_dt, 0.5 * c.footprint_check_resolution / speed)
+        dense = np.arange(1, int(math.ceil(min(c.dense_time, horizon) / ds)) + 1) * ds
+        return np.unique(np.concatenate([dense, coarse]))
+
+    def _new_contacts(self, poses: NDArray[np.float64], pose: tuple[float, float, float],
+                      costmap: Costmap) -> NDArray[np.bool_]:
+        """Per pose, whether the outline touches a lethal cell that the outline at ``pose`` does not touch."""
+        pts = self._points
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        px = poses[:, 0:1] + c * pts[None, :, 0] - s * pts[None, :, 1]
+        py = poses[:, 1:2] + s * pts[None, :, 0] + c * pts[None, :, 1]
+        col, row = costmap.world_to_cell(px, py)
+        inb = costmap.in_bounds(col, row)
+        flat = np.where(inb, row * costmap.shape[1] + col, 0)
+        lethal = inb & (costmap.costs.flat[flat] == LETHAL)
+        start = self._lethal_cells(np.array([pose], dtype=float), costmap)[0]
+        if start:
+            lethal &= ~np.isin(flat, np.fromiter(start, dtype=np.int64))
+        return lethal.any(axis=1)
 
     def _accel_limit(self, cmd: tuple[float, float, float], vel: tuple[float, float, float],
                      dt: float) -> tuple[float, float, float]:
@@ -164,37 +343,19 @@ class HolonomicController:
             out.append(float(np.clip(u, v0 - a * dt, v0 + a * dt)))
         return out[0], out[1], out[2]
 
-    def _collision_free(self, cmd: tuple[float, float, float], pose: tuple[float, float, float],
-                        costmap: Costmap) -> tuple[tuple[float, float, float], bool]:
-        """First candidate whose simulated footprint never touches more lethal cells than it touches now."""
-        vx, vy, wz = cmd
-        cands = [(vx, vy, wz), (vx, vy, 0.0), (0.5 * vx, 0.5 * vy, wz), (0.5 * vx, 0.5 * vy, 0.0),
-                 (0.25 * vx, 0.25 * vy, 0.0), (0.0, 0.0, wz)]
-        cands = [cd for cd in cands if any(abs(u) > 1e-6 for u in cd)]
-        if not cands:
-            return (0.0, 0.0, 0.0), False
-        hits = self.trajectory_hits(np.array(cands), pose, costmap)
-        for cd, h in zip(cands, hits, strict=True):
-            if not h:
-                return cd, False
-        return (0.0, 0.0, 0.0), True
-
     def trajectory_hits(self, cands: NDArray[np.float64], pose: tuple[float, float, float],
                         costmap: Costmap, horizon: float | None = None) -> NDArray[np.bool_]:
-        """For body-velocity candidates (K, 3), whether the forward-simulated footprint hits a lethal cell
-        it is not already touching at the start."""
+        """For body-velocity candidates (K, 3) held constant (what the recoveries command), whether the
+        forward-simulated footprint touches a lethal cell it is not already touching at the start."""
         c = self.cfg
         horizon = c.collision_check_time if horizon is None else horizon
-        steps = max(1, int(math.ceil(horizon / c.sim_dt)))
-        t = np.arange(1, steps + 1) * c.sim_dt
+        t = self._sample_times(cands[:, :2], cands[:, 2], horizon)
+        steps = len(t)
+        h = np.diff(t, prepend=0.0)[None, :]
         th = pose[2] + cands[:, 2:3] * t[None, :]                        # (K, T)
-        # exact integration of constant body twist, done by small steps for simplicity
-        cth = np.cos(pose[2] + cands[:, 2:3] * (t[None, :] - c.sim_dt / 2))
-        sth = np.sin(pose[2] + cands[:, 2:3] * (t[None, :] - c.sim_dt / 2))
-        dx = (cth * cands[:, 0:1] - sth * cands[:, 1:2]) * c.sim_dt
-        dy = (sth * cands[:, 0:1] + cth * cands[:, 1:2]) * c.sim_dt
+        cth = np.cos(pose[2] + cands[:, 2:3] * (t[None, :] - h / 2))
+        sth = np.sin(pose[2] + cands[:, 2:3] * (t[None, :] - h / 2))
+        dx = (cth * cands[:, 0:1] - sth * cands[:, 1:2]) * h
+        dy = (sth * cands[:, 0:1] + cth * cands[:, 1:2]) * h
         poses = np.stack([pose[0] + np.cumsum(dx, axis=1), pose[1] + np.cumsum(dy, axis=1), th], axis=-1)
-        now = int(np.sum(costmap.footprint_costs(np.array(pose), self._points, outside=0) == LETHAL))
-        fc = costmap.footprint_costs(poses.reshape(-1, 3), self._points, outside=0) == LETHAL
-        per_pose = fc.sum(axis=1).reshape(len(cands), steps)
-        return np.any(per_pose > now, axis=1)
+        return self._new_contacts(poses.reshape(-1, 3), pose, costmap).reshape(len(cands), steps).any(axis=1)

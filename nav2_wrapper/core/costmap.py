@@ -238,8 +238,8 @@ class Costmap:
             valid = finite & (r >= scan.range_min) & (r <= scan.range_max)
             if src.clearing:
                 dist = np.where(valid, np.minimum(r, src.raytrace_max_range), -1.0)
-                if src.inf_is_valid:
-                    dist = np.where(~finite | (r > scan.range_max), src.raytrace_max_range, dist)
+                if src.inf_is_valid:   # +inf (no return) clears to the raytrace range; -inf (too close) never
+                    dist = np.where((r > scan.range_max) & ~np.isnan(r), src.raytrace_max_range, dist)
                 self._clear_rays(sx, sy, ang, dist, src.raytrace_min_range)
                 reach = max(reach, src.raytrace_max_range)
             if src.marking:

@@ -73,17 +73,19 @@ class Run:
 
 def drive(nav: Navigator, grid: GridMap, pose: tuple[float, float, float], t_max: float, dt: float = 0.05,
           t0: float = 0.0, scan: bool = True, world: GridMap | None = None, until_terminal: bool = True,
-          on_step=None) -> Run:
+          on_step=None, scan_fn=None) -> Run:
     """Closed loop: tick the navigator, integrate the body twist, ray-cast scans on ``world`` (default grid).
-    ``grid`` is what the navigator is told the map is (sent on the first tick)."""
+    ``grid`` is what the navigator is told the map is (sent on the first tick); ``scan_fn(world, pose)``
+    replaces the ideal ray cast (e.g. with a noisy one)."""
     world = world or grid
     run = Run()
     x, y, th = pose
     vel = (0.0, 0.0, 0.0)
     t = t0
     first = True
+    scan_fn = scan_fn or cast_scan
     while t - t0 < t_max:
-        sc = cast_scan(world, (x, y, th)) if scan and int(round(t / dt)) % 2 == 0 else None
+        sc = scan_fn(world, (x, y, th)) if scan and int(round(t / dt)) % 2 == 0 else None
         cmd = nav.tick(t, (x, y, th), vel, grid=grid if first else None, scan=sc)
         first = False
         vx = float(np.clip(cmd.vx, -0.5, 0.5))
