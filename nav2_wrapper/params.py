@@ -32,7 +32,7 @@ _TOKEN_RE = re.compile(r"__ROBONIX_[A-Z0-9_]+__")
 PLANNER_PLUGINS = {"robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
                    "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner"}
 CONTROLLER_PLUGINS = {"robonix_nav::HolonomicPursuitController"}
-GOAL_CHECKERS = {"nav2_controller::SimpleGoalChecker"}
+GOAL_CHECKERS = {"nav2_controller::SimpleGoalChecker", "nav2_controller::StoppedGoalChecker"}
 PROGRESS_CHECKERS = {"nav2_controller::SimpleProgressChecker"}
 BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait"}
 LAYERS = {"nav2_costmap_2d::StaticLayer": "static", "nav2_costmap_2d::ObstacleLayer": "obstacle",
@@ -96,6 +96,8 @@ class GoalCheckerParams(_P):
     xy_goal_tolerance: float = Field(0.25, gt=0)
     yaw_goal_tolerance: float = Field(0.25, gt=0)
     stateful: bool = True
+    trans_stopped_velocity: float = Field(0.25, gt=0)   # StoppedGoalChecker only (Nav2 defaults)
+    rot_stopped_velocity: float = Field(0.25, gt=0)
 
 
 class ProgressCheckerParams(_P):
@@ -423,7 +425,10 @@ def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str 
                               smooth_path=pp.smooth_path, heuristic_weight=pp.heuristic_weight,
                               escape_radius=pp.escape_radius),
         controller=ControllerConfig(**ctrl_fields, footprint=lcm.footprint),
-        goal_checker=GoalCheckerConfig(gp.xy_goal_tolerance, gp.yaw_goal_tolerance, gp.stateful),
+        goal_checker=GoalCheckerConfig(
+            gp.xy_goal_tolerance, gp.yaw_goal_tolerance, gp.stateful,
+            *((gp.trans_stopped_velocity, gp.rot_stopped_velocity) if gp.plugin.endswith("StoppedGoalChecker")
+              else (None, None))),
         progress_checker=ProgressCheckerConfig(pg.required_movement_radius, pg.movement_time_allowance),
         recovery=RecoveryConfig(number_of_retries=bt.number_of_retries, behaviors=tuple(bt.recovery_behaviors),
                                 spin_dist=bt.spin_dist, max_rotational_vel=bs.max_rotational_vel,

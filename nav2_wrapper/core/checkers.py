@@ -1,4 +1,4 @@
-"""Goal and progress checkers with Nav2's semantics and defaults (SimpleGoalChecker, SimpleProgressChecker)."""
+"""Goal and progress checkers with Nav2's semantics and defaults (Simple/StoppedGoalChecker, SimpleProgressChecker)."""
 
 from __future__ import annotations
 
@@ -13,6 +13,10 @@ class GoalCheckerConfig:
     xy_goal_tolerance: float = 0.25
     yaw_goal_tolerance: float = 0.25
     stateful: bool = True   # once inside the xy tolerance, only the yaw is checked afterwards (Nav2 default)
+    # StoppedGoalChecker: the goal also needs the base nearly at rest (None = SimpleGoalChecker). Without it a
+    # goal is declared while the base still turns fast, and it comes to rest outside the yaw tolerance.
+    trans_stopped_velocity: float | None = None
+    rot_stopped_velocity: float | None = None
 
 
 class GoalChecker:
@@ -31,10 +35,18 @@ class GoalChecker:
             self._xy_latched = True
         return ok
 
-    def is_goal_reached(self, pose: tuple[float, float, float], goal: tuple[float, float, float]) -> bool:
+    def is_goal_reached(self, pose: tuple[float, float, float], goal: tuple[float, float, float],
+                        vel: tuple[float, float, float] | None = None) -> bool:
+        """Within the xy and yaw tolerances and, for a stopped checker, with body velocity ``vel`` at rest."""
         if not self.xy_reached(pose, goal):
             return False
-        return abs(float(wrap_angle(pose[2] - goal[2]))) <= self.cfg.yaw_goal_tolerance
+        if abs(float(wrap_angle(pose[2] - goal[2]))) > self.cfg.yaw_goal_tolerance:
+            return False
+        c = self.cfg
+        if vel is not None and c.trans_stopped_velocity is not None and \
+                math.hypot(vel[0], vel[1]) > c.trans_stopped_velocity:
+            return False
+        return vel is None or c.rot_stopped_velocity is None or abs(vel[2]) <= c.rot_stopped_velocity
 
 
 @dataclass

@@ -209,9 +209,10 @@ class HolonomicController:
 
     # ---- command selection ---------------------------------------------------------------------------
     def _wz_toward(self, target: float, th: float) -> float:
+        """Proportional turn, capped so the base can still brake to rest at the target heading."""
         err = float(wrap_angle(target - th))
-        return float(np.clip(self.cfg.rotation_gain * err, -self.cfg.max_vel_theta, self.cfg.max_vel_theta)) * \
-            self.speed_limit
+        cap = min(self.cfg.max_vel_theta, math.sqrt(2.0 * self.cfg.acc_lim_theta * abs(err)))
+        return float(np.clip(self.cfg.rotation_gain * err, -cap, cap)) * self.speed_limit
 
     def _choose(self, vm: NDArray[np.float64], targets: list[float], pose: tuple[float, float, float],
                 vel: tuple[float, float, float], costmap: Costmap,

@@ -218,7 +218,7 @@ class Navigator:
                 return Command(step.vx, step.vy, step.wz, rec.state, rec.detail, rec.run_id)
             self._force_replan = True
             self.progress.reset()
-        if self.goal_checker.is_goal_reached(pose, rec.goal):
+        if self.goal_checker.is_goal_reached(pose, rec.goal, vel):
             err = math.hypot(pose[0] - rec.goal[0], pose[1] - rec.goal[1])
             self._finish(rec, SUCCEEDED, f"reached goal ({err:.2f} m from it, {rec.recoveries} recoveries)", now)
             return self._zero(rec)
