@@ -106,15 +106,32 @@ class Inputs:
             vel = self.odom_vel
         return RobotState((float(pose[0]), float(pose[1]), float(pose[2])), vel, age(o_b), age(m_o))
 
+    def pose_at(self, stamp: float, fallback: Pose) -> Pose:
+        """Base pose in map when a sensor sample was taken: map→odom (latest; slow) ∘ odom→base at ``stamp``.
+
+        Placing a scan at the *current* pose instead smears its returns by the motion since it was taken
+        (5 cm and several degrees at speed), which marks false obstacles in doorways.
+        """
+        f = self.frames
+        if stamp <= 0.0:
+            return fallback
+        try:
+            m_o = self.tf.lookup_transform(f.map, f.odom)
+            o_b = self.tf.lookup_transform(f.odom, f.base, stamp)
+        except TfError:
+            return fallback  # e.g. the scan is newer than the latest odom→base: the latest pose is closest
+        p = compose(m_o.to_pose2d(), o_b.to_pose2d())
+        return (float(p[0]), float(p[1]), float(p[2]))
+
     def core_scan(self, msg: LaserScan, robot: Pose) -> tuple[CoreScan, Pose] | None:
-        """The scan for the costmaps and the laser's pose in map (base pose ∘ base→laser from TF)."""
+        """The scan for the costmaps and the laser's pose in map at the scan's stamp (base ∘ base→laser)."""
         frame = msg.header.frame_id.lstrip("/") or self.frames.base
         try:
             mount = self.tf.lookup_pose2d(self.frames.base, frame)
         except TfError as exc:
             log.debug("no TF %s -> %s for the scan: %s", self.frames.base, frame, exc)
             return None
-        sp = compose(robot, mount)
+        sp = compose(self.pose_at(msg.header.stamp.to_sec(), robot), mount)
         scan = CoreScan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
                         float(msg.range_min), float(msg.range_max))
         return scan, (float(sp[0]), float(sp[1]), float(sp[2]))
