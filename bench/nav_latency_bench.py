@@ -33,7 +33,7 @@ from robonix_api.dds import DdsNode, Twist  # noqa: E402
 from robonix_api.proto_gen import navigation_pb2 as nav_pb  # noqa: E402
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc  # noqa: E402
 from robonix_api.proto_gen import sim_pb2  # noqa: E402
-from tests.nav_provider.procs import ACTIVATE, HAL, INIT, MAP_PROVIDER, NAV, Proc, wait_until  # noqa: E402
+from tests.support.procs import ACTIVATE, HAL, INIT, MAP_PROVIDER, NAV, Proc, wait_until  # noqa: E402
 
 GOALS = [(7.0, 1.5), (3.5, 7.5)]  # kitchen, bedroom: each goal is sent from far away (the farther one)
 OUT = REPO / "bench" / "results" / "nav_latency.json"

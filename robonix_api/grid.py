@@ -127,7 +127,7 @@ def load_map_yaml(path: str | os.PathLike[str]) -> GridMap:
         raise MapFileError(f"{path}: {exc}") from exc
 
 
-def _atomic_write(path: Path, payload: bytes) -> None:
+def atomic_write(path: Path, payload: bytes) -> None:
     """Write via a temp file + rename so a crash never leaves a half-written map."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
@@ -155,7 +155,7 @@ def save_map_yaml(grid: GridMap, yaml_path: str | os.PathLike[str], *, occupied_
     pix[(d >= 0) & (d <= free_thresh * 100)] = 254
     pix[d >= occupied_thresh * 100] = 0
     header = f"P5\n# robonix map\n{grid.width} {grid.height}\n255\n".encode()
-    _atomic_write(pgm_path, header + pix.tobytes())
+    atomic_write(pgm_path, header + pix.tobytes())
     meta = {
         "image": pgm_path.name,
         "mode": "trinary",
@@ -165,5 +165,5 @@ def save_map_yaml(grid: GridMap, yaml_path: str | os.PathLike[str], *, occupied_
         "occupied_thresh": occupied_thresh,
         "free_thresh": free_thresh,
     }
-    _atomic_write(yaml_path, yaml.safe_dump(meta, sort_keys=False).encode())
+    atomic_write(yaml_path, yaml.safe_dump(meta, sort_keys=False).encode())
     return yaml_path

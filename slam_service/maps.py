@@ -17,9 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from robonix_api.grid import GridMap, MapFileError, load_map_yaml, save_map_yaml
+from robonix_api.grid import GridMap, MapFileError, atomic_write, load_map_yaml, save_map_yaml
 from slam_service.core import SessionData, SessionFileError, load_session
-from slam_service.core.session import atomic_write
 
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
 MAP_YAML, MAP_PGM, SESSION, META = "map.yaml", "map.pgm", "session.npz", "meta.json"

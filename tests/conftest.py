@@ -1,13 +1,18 @@
 """Suite-wide isolation: loopback-only DDS on a domain id of this run's own, short atlas timeouts.
 
 Every process a test starts inherits this environment, so parallel runs on one machine never share
-DDS traffic, and nothing leaves 127.0.0.1.
+DDS traffic, and nothing leaves 127.0.0.1. Also makes tests/support (shared process helpers) importable
+as ``support``: pytest's default (prepend) import mode already puts tests/ on sys.path, this keeps it so
+under other import modes.
 """
 
 import os
+import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
+if str(REPO / "tests") not in sys.path:
+    sys.path.insert(0, str(REPO / "tests"))
 
 # A domain id per test run (0..232 is Cyclone's valid range with the default port mapping).
 os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 200))

@@ -9,13 +9,14 @@ from __future__ import annotations
 import io
 import json
 import os
-import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+
+from robonix_api.grid import atomic_write
 
 from .posegraph import PoseGraph
 from .types import SlamConfig
@@ -41,19 +42,6 @@ class SessionData:
     points: list[NDArray[np.float32]] = field(default_factory=list)  # per node, base frame (P, 2)
     origins: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))  # lidar position, base
     config: SlamConfig = field(default_factory=SlamConfig)
-
-
-def atomic_write(path: Path, payload: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(payload)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:

@@ -3,21 +3,16 @@ the provider reaches ACTIVE, publishes /scan, and every recorded process is gone
 
 from __future__ import annotations
 
-import json
-import os
 import shutil
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from support.boot import RbnxBoot
+from support.procs import REPO
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.dds import DdsNode, LaserScan
 from robonix_api.types import LifecycleState
-
-from .conftest import REPO, alive, wait_until
 
 pytestmark = pytest.mark.integration
 
@@ -38,35 +33,14 @@ primitive:
 """
 
 
-def _rbnx() -> list[str]:
-    exe = Path(sys.executable).parent / "rbnx"
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "rbnx.cli"]
-
-
 def test_rbnx_boot_hal_only_and_sigint_leaves_nothing(tmp_path: Path) -> None:
     if shutil.which("bash") is None:
         pytest.skip("rbnx runs start: with bash")
     deploy = tmp_path / "deploy.yaml"
     deploy.write_text(DEPLOY.format(path=REPO / "hal_panda_mobile"))
-    env = dict(os.environ, RBNX_STATE_DIR=str(tmp_path / "state"), RBNX_ATLAS_LISTEN="127.0.0.1:0",
-               RBNX_PYTHON=sys.executable, PYTHONUNBUFFERED="1")
-    for name in ("ROBONIX_ATLAS", "RBNX_INSTANCE_NAME", "RBNX_DEPLOY_MANAGED"):
-        env.pop(name, None)
-    out = tmp_path / "boot.out"
-    with open(out, "w") as fh:
-        proc = subprocess.Popen(_rbnx() + ["boot", "-f", str(deploy), "--log-dir", str(tmp_path / "logs")],
-                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)
-    try:
-        def ready() -> bool:
-            text = out.read_text()
-            if proc.poll() is not None:
-                raise AssertionError(f"rbnx boot exited {proc.returncode}:\n{text}")
-            return "1/1 entries ready" in text
-
-        wait_until(ready, 180, "boot summary", 0.2)
-        (state_file,) = (tmp_path / "state").glob("boot-*.json")
-        st = json.loads(state_file.read_text())
-        pids = [st["pid"], st["atlas_proc"]["pid"], *(c["pid"] for c in st["children"])]
+    with RbnxBoot(deploy, tmp_path) as boot:
+        boot.wait_ready(1)
+        st = boot.state()
         with AtlasClient(st["atlas"]) as client:
             (prov,) = client.query(id="sim_base")
             assert prov.state == LifecycleState.ACTIVE
@@ -77,13 +51,8 @@ def test_rbnx_boot_hal_only_and_sigint_leaves_nothing(tmp_path: Path) -> None:
             scan = node.wait_for_message("/scan", LaserScan, 60, "best_effort")
             assert scan is not None and len(scan.ranges) == 360
 
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(180) == 0, out.read_text()
-        assert "CMD_SHUTDOWN ok" in out.read_text()
-        wait_until(lambda: not any(alive(p) for p in pids), 30, "every recorded process to exit")
-        log = (tmp_path / "logs" / "sim_base.log").read_text()
+        boot.interrupt()
+        assert "CMD_SHUTDOWN ok" in boot.output()
+        boot.wait_all_exited()
+        log = boot.log("sim_base")
         assert "Traceback" not in log, log[-3000:]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(30)

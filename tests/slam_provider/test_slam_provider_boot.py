@@ -4,29 +4,21 @@ map->odom is published. SIGINT then leaves no recorded process behind."""
 
 from __future__ import annotations
 
-import json
-import os
 import shutil
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import yaml
+from support.boot import RbnxBoot
+from support.procs import REPO
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.dds import DdsNode, OccupancyGrid, TfBuffer
 from robonix_api.types import LifecycleState
 
-from .conftest import HAL_CONFIG, REPO, alive, wait_until
+from .conftest import HAL_CONFIG
 
 pytestmark = pytest.mark.integration
-
-
-def _rbnx() -> list[str]:
-    exe = Path(sys.executable).parent / "rbnx"
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "rbnx.cli"]
 
 
 def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
@@ -44,27 +36,11 @@ def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
     path = tmp_path / "deploy.yaml"
     path.write_text(yaml.safe_dump(deploy, sort_keys=False))
     assert path.read_text().index("service:") < path.read_text().index("primitive:")
-    env = dict(os.environ, RBNX_STATE_DIR=str(tmp_path / "state"), RBNX_ATLAS_LISTEN="127.0.0.1:0",
-               RBNX_PYTHON=sys.executable, PYTHONUNBUFFERED="1")
-    for name in ("ROBONIX_ATLAS", "RBNX_INSTANCE_NAME", "RBNX_DEPLOY_MANAGED"):
-        env.pop(name, None)
-    out = tmp_path / "boot.out"
-    with open(out, "w") as fh:
-        proc = subprocess.Popen(_rbnx() + ["boot", "-f", str(path), "--log-dir", str(tmp_path / "logs")],
-                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)
-    try:
-        def ready() -> bool:
-            text = out.read_text()
-            if proc.poll() is not None:
-                raise AssertionError(f"rbnx boot exited {proc.returncode}:\n{text}")
-            return "2/2 entries ready" in text
-
-        wait_until(ready, 180, "boot summary", 0.2)
-        text = out.read_text()
+    with RbnxBoot(path, tmp_path) as boot:
+        boot.wait_ready(2)
+        text = boot.output()
         assert "waiting for robonix/primitive/lidar/lidar" in text, text
-        (state_file,) = (tmp_path / "state").glob("boot-*.json")
-        st = json.loads(state_file.read_text())
-        pids = [st["pid"], st["atlas_proc"]["pid"], *(c["pid"] for c in st["children"])]
+        st = boot.state()
         with AtlasClient(st["atlas"]) as client:
             (prov,) = client.query(id="mapping")
             assert prov.state == LifecycleState.ACTIVE
@@ -80,12 +56,7 @@ def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
             assert grid is not None and grid.header.frame_id == "map"
             assert grid.info.width * grid.info.height == len(grid.data) > 100
 
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(180) == 0, out.read_text()
-        wait_until(lambda: not any(alive(p) for p in pids), 30, "every recorded process to exit")
-        log = (tmp_path / "logs" / "mapping.log").read_text()
+        boot.interrupt()
+        boot.wait_all_exited()
+        log = boot.log("mapping")
         assert "CMD_INIT deferred" in log and "Traceback" not in log, log[-3000:]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(30)
