@@ -1,24 +1,25 @@
-"""SLAM quality on a MuJoCo scene: drive a scripted loop through named waypoints and score the map.
+"""SLAM quality on a MuJoCo scene: drive a scripted loop and score the trajectory and the map.
 
-The robot is driven by the navigator on the ground-truth map with the true pose (so the route does not
-depend on the SLAM result being scored), while SLAM integrates the sim's drifting odometry and lidar.
+The drive is independent of the navigation stack (no nav2_wrapper here): a deterministic holonomic
+P-controller on the ground-truth pose follows a fixed polyline of waypoints (``LOOPS``) at a fixed speed,
+turning in place at each corner to face the next leg. SLAM integrates the sim's drifting odometry and
+lidar, so the route cannot depend on the SLAM result being scored, and one drive feeds two engines
+(loop closure on and off) the very same scans and odometry. Same seed, same numbers.
 """
 
 from __future__ import annotations
 
-import dataclasses
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from hal_panda_mobile.sim import LidarNoise, OdomNoise
+from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim, load_robot_description, load_scene
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
-from .pipeline import GoalResult, Pipeline, PipelineOptions
-
-# Routes that revisit the start area after a long detour, so loop closure has something to close.
+# Named-waypoint routes for the navigation evaluations (tests/eval/test_nav_noise, bench/nav_suite).
 ROUTES: dict[str, tuple[str, ...]] = {
     "apartment": ("bedroom", "living", "kitchen", "bedroom_2", "bathroom", "bedroom_2", "kitchen", "living"),
     "warehouse": ("aisle_1", "cross", "aisle_2", "dock", "top_aisle", "aisle_3", "aisle_1"),
@@ -26,19 +27,78 @@ ROUTES: dict[str, tuple[str, ...]] = {
     "kitchen": ("island_east", "fridge", "pantry", "dining", "island_east"),
 }
 
+# A waypoint is (x, y) or (x, y, heading): the robot turns in place at the previous waypoint to face the
+# leg (or to ``heading`` if given: a holonomic sidestep where there is no room to turn), then drives it.
+Waypoint = tuple[float, float] | tuple[float, float, float]
+_UP, _DOWN = math.pi / 2, -math.pi / 2
 
-# "hard": where loop closure has something to fix. Odometry drifts ~2.5x the realistic profile and SLAM
-# gets a cheap lidar's view of the scans: every 3rd beam (120 of 360) with 2.5 cm range noise in total.
-# Only SLAM's copy is degraded; the navigator (on ground truth here) keeps the sim's 1 cm scans.
-HARD_ODOM = OdomNoise(v_scale_std=0.05, w_scale_std=0.05, v_add_std=0.01, w_add_std=0.02, scale_bias=0.02,
-                      w_bias=0.01)
-HARD_BEAM_STEP = 3
-HARD_EXTRA_RANGE_NOISE = 0.023  # on top of the sim's 1 cm: sqrt(0.01^2 + 0.023^2) = 2.5 cm
+# Scripted SLAM loops: long excursions that come back through already-mapped rooms and end at the start.
+# Apartment (12 x 10 m, start (2.5, 4.0)): bedroom lap, living -> hall through the east doorway (y 3.95-4.95),
+# lap round the dining table, bedroom_2 through the 0.9 m doorway at x 8.5, bathroom (doorway y 7.05-8.15)
+# lap, back out the same way, living lap, start. ~56 m; every turn-in-place point has >= 0.43 m (the
+# footprint's circumradius) of clearance, legs keep >= 0.2 m (collision events are counted and tested).
+LOOPS: dict[str, tuple[Waypoint, ...]] = {
+    "apartment": (
+        (3.8, 4.0), (3.8, 5.2), (2.6, 5.2),  # straight out along the start heading first
+        (2.6, 7.0), (4.2, 7.0), (4.2, 8.6), (2.8, 8.6), (2.6, 7.0),  # bedroom lap
+        (2.6, 4.45), (6.0, 4.45),  # living -> hall
+        (6.0, 1.6), (9.0, 1.6), (9.0, 4.0),  # round the dining table
+        (8.5, 4.0), (8.5, 6.2), (7.6, 6.2, _UP),  # bedroom_2 doorway, sidestep clear of the x = 9 wall
+        (7.5, 7.55), (10.8, 7.55), (10.8, 6.3), (9.6, 6.3), (9.6, 7.55), (7.5, 7.55),  # bathroom lap
+        (7.6, 6.2), (8.5, 6.2, _DOWN), (8.5, 4.0),  # back out of bedroom_2
+        (6.0, 4.45), (1.4, 4.45), (1.4, 2.9), (4.2, 2.9), (2.5, 4.0),  # hall -> living lap -> start
+    ),
+    # Warehouse (20 x 14 m, start (2, 4)): twice round the shelf block, a genuine cycle (~42 m per lap).
+    "warehouse": ((3.0, 4.0), (17.0, 4.0), (17.0, 10.0), (3.0, 10.0), (3.0, 4.0),
+                  (17.0, 4.0), (17.0, 10.0), (3.0, 10.0), (3.0, 4.0), (2.0, 4.0)),
+}
+
+
+@dataclass(frozen=True)
+class LoopSetting:
+    """Sensor quality and drive parameters of one SLAM-loop evaluation."""
+
+    name: str
+    odom_noise: OdomNoise
+    lidar_noise: LidarNoise  # the sim's lidar (SLAM sees it decimated by beam_step)
+    beam_step: int = 1  # SLAM gets every beam_step-th beam (360 / beam_step beams)
+    max_range: float | None = None  # m: a shorter-range lidar (longer returns become "no return", +inf)
+    speed: float = 0.4  # m/s along each leg
+    slam_config: SlamConfig | None = None
+
+
+# "realistic": the sim's realistic odometry drift, the full 360-beam lidar with 1 cm noise.
+REALISTIC = LoopSetting("realistic", OdomNoise.realistic(), LidarNoise(noise_std=0.01))
+# "hard": where loop closure has something to fix. Odometry drifts ~2.5x the realistic profile (5 % scale
+# noise, 2 % wheel-radius bias, 0.01 rad/s gyro bias) and SLAM gets a cheap lidar's view: 2.5 cm range
+# noise, 3 % dropouts, every 3rd beam (120 of 360).
+HARD = LoopSetting("hard", OdomNoise(v_scale_std=0.05, w_scale_std=0.05, v_add_std=0.01, w_add_std=0.02,
+                                     scale_bias=0.02, w_bias=0.01),
+                   LidarNoise(noise_std=0.025, dropout_prob=0.03), beam_step=3)
+SETTINGS = {"realistic": REALISTIC, "hard": HARD}
+
+
+@dataclass
+class DriveResult:
+    """How the scripted drive went (ground truth)."""
+
+    waypoints: int
+    reached: int  # waypoints reached (== waypoints unless a leg timed out)
+    collisions: int  # collision episodes in the sim
+    path_length: float  # m driven
+    sim_time: float  # s
+    max_track_error: float  # m, largest cross-track error while driving a leg
+
+    @property
+    def completed(self) -> bool:
+        return self.reached == self.waypoints
 
 
 @dataclass
 class SlamLoopResult:
     scene: str
+    setting: str
+    seed: int
     loop_closure: bool
     ate_rmse: float  # m, SLAM nodes vs ground truth, no alignment (map frame starts at the true start)
     odom_ate_rmse: float  # m, raw odometry at the same stamps: what SLAM had to correct
@@ -47,96 +107,141 @@ class SlamLoopResult:
     scans: int
     loop_closures: int
     slam_seconds: float  # wall s inside SlamEngine.process (informative)
+    drive: DriveResult
     optimize_times: list[float] = field(default_factory=list)
-    goals: list[GoalResult] = field(default_factory=list)
 
     @property
     def scans_per_s(self) -> float:
         return self.scans / self.slam_seconds if self.slam_seconds > 0 else float("nan")
 
 
-class _TimedSlam:
-    """Wraps SlamEngine.process to accumulate its wall time without touching the engine."""
-
-    def __init__(self, pipe: Pipeline) -> None:
-        self.seconds = 0.0
-        inner = pipe.slam.process
-
-        def timed(*args: object, **kwargs: object):  # type: ignore[no-untyped-def]
-            t0 = time.perf_counter()
-            out = inner(*args, **kwargs)  # type: ignore[arg-type]
-            self.seconds += time.perf_counter() - t0
-            return out
-
-        pipe.slam.process = timed  # type: ignore[method-assign]
+def _wrap(a: float) -> float:
+    return math.remainder(a, 2 * math.pi)
 
 
-class _Degrade:
-    """Wraps SlamEngine.process to hand SLAM a decimated, noisier copy of each scan (seeded)."""
+class ScriptedDriver:
+    """Holonomic P-controller on the true pose: turn in place to the leg heading, then drive the leg at a
+    fixed speed with cross-track correction, slowing down over the last ~0.3 m. Deterministic."""
 
-    def __init__(self, engine: SlamEngine, step: int, extra_noise: float, seed: int) -> None:
-        self.rng = np.random.default_rng(seed + 7919)
-        inner = engine.process
+    TURN_TOL = 0.02  # rad: heading reached
+    REACH_TOL = 0.015  # m: waypoint reached
+    W_MAX = 1.0  # rad/s
 
-        def degraded(scan: Scan, odom: object, stamp: float | None = None):  # type: ignore[no-untyped-def]
-            r = np.asarray(scan.ranges, dtype=np.float64)[::step].copy()
-            ok = np.isfinite(r)
-            r[ok] += self.rng.normal(0.0, extra_noise, int(ok.sum()))
-            return inner(dataclasses.replace(scan, ranges=r.astype(np.float32),
-                                             angle_increment=scan.angle_increment * step), odom, stamp)
+    def __init__(self, start: Sequence[float], waypoints: Sequence[Waypoint], speed: float) -> None:
+        self.wps = [tuple(map(float, w)) for w in waypoints]
+        self.speed = speed
+        self.i = 0
+        self.seg_start = (float(start[0]), float(start[1]))
+        self.turning = True
+        self.max_track_error = 0.0
 
-        engine.process = degraded  # type: ignore[method-assign]
+    @property
+    def done(self) -> bool:
+        return self.i >= len(self.wps)
+
+    def _heading(self) -> float:
+        w = self.wps[self.i]
+        if len(w) > 2:
+            return w[2]
+        return math.atan2(w[1] - self.seg_start[1], w[0] - self.seg_start[0])
+
+    def command(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+        """Body-frame (vx, vy, wz) for the true pose (x, y, yaw)."""
+        if self.done:
+            return 0.0, 0.0, 0.0
+        sx, sy = self.seg_start
+        tx, ty = self.wps[self.i][:2]
+        e_yaw = _wrap(self._heading() - yaw)
+        wz = max(-self.W_MAX, min(self.W_MAX, 2.0 * e_yaw))
+        if self.turning:
+            vwx, vwy = 1.5 * (sx - x), 1.5 * (sy - y)  # hold position while turning
+            if abs(e_yaw) < self.TURN_TOL:
+                self.turning = False
+        else:
+            length = math.hypot(tx - sx, ty - sy)
+            dx, dy = (tx - sx) / length, (ty - sy) / length
+            along = (x - sx) * dx + (y - sy) * dy
+            cx, cy = (x - sx) - along * dx, (y - sy) - along * dy
+            self.max_track_error = max(self.max_track_error, math.hypot(cx, cy))
+            rem = length - along
+            v = max(-self.speed, min(self.speed, 1.2 * rem + math.copysign(0.05, rem)))
+            vwx, vwy = v * dx - 2.0 * cx, v * dy - 2.0 * cy
+            if abs(rem) < self.REACH_TOL and math.hypot(tx - x, ty - y) < 2 * self.REACH_TOL:
+                self.i += 1
+                self.seg_start = (tx, ty)
+                self.turning = True
+        c, s = math.cos(yaw), math.sin(yaw)
+        return c * vwx + s * vwy, -s * vwx + c * vwy, wz
 
 
 def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
-                   route: Sequence[str] | None = None, options: PipelineOptions | None = None
-                   ) -> tuple[SlamLoopResult, SlamLoopResult]:
-    """(LC on, LC off) from ONE drive: the route does not depend on SLAM (navigator on ground truth), so a
-    second engine with loop closure off is fed the very same scans and odometry. ``hard``: see HARD_*."""
-    base = options or PipelineOptions()
-    over: dict[str, object] = {"scene": scene, "seed": seed, "loop_closure": True, "nav_map": "ground_truth"}
-    if hard:
-        over["odom_noise"] = HARD_ODOM
-        over["lidar_noise"] = LidarNoise(noise_std=0.01)
-    pipe = Pipeline(PipelineOptions(**{**base.__dict__, **over}))
-    cfg = pipe.slam.config
-    off = SlamEngine(SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": False}))
-    if hard:
-        _Degrade(pipe.slam, HARD_BEAM_STEP, HARD_EXTRA_RANGE_NOISE, seed)
-        _Degrade(off, HARD_BEAM_STEP, HARD_EXTRA_RANGE_NOISE, seed)  # same seed: identical scans
-    timer = _TimedSlam(pipe)
-    off_seconds = [0.0]
-    inner = pipe.slam.process
-
-    def both(*args: object, **kwargs: object):  # type: ignore[no-untyped-def]
-        t0 = time.perf_counter()
-        off.process(*args, **kwargs)  # type: ignore[arg-type]
-        off_seconds[0] += time.perf_counter() - t0
-        return inner(*args, **kwargs)  # type: ignore[arg-type]
-
-    pipe.slam.process = both  # type: ignore[method-assign]
-    wps = pipe.sim.scene.waypoints
-    goals = [(float(wps[n][0]), float(wps[n][1]), 0.0) for n in list(route or ROUTES[scene])]
-    results = pipe.run_goals(goals)
-    truth = pipe.ground_truth_grid(min_height=pipe.robot.lidar.mount[2])
+                   route: Sequence[Waypoint] | None = None, setting: LoopSetting | None = None,
+                   leg_timeout: float = 40.0) -> tuple[SlamLoopResult, SlamLoopResult]:
+    """(LC on, LC off) from ONE scripted drive of ``route`` (default LOOPS[scene]) under ``setting``
+    (default HARD if ``hard`` else REALISTIC): both engines get identical scans and odometry."""
+    st = setting or (HARD if hard else REALISTIC)
+    robot = load_robot_description()
+    sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=st.odom_noise, lidar_noise=st.lidar_noise)
+    cfg = st.slam_config or SlamConfig()
+    engines = {lc: SlamEngine(SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": lc})) for lc in (True, False)}
+    seconds = {True: 0.0, False: 0.0}
+    mx, my, _, myaw = robot.lidar.mount
+    mount = (mx, my, myaw)
+    gt_at: dict[float, tuple[float, float, float]] = {}
+    odom_at: dict[float, tuple[float, float, float]] = {}
+    wps = list(route or LOOPS[scene])
+    x0, y0, _, *_ = sim.ground_truth()
+    driver = ScriptedDriver((x0, y0), wps, st.speed)
+    ctrl_every = max(1, round(0.05 / sim.timestep))  # 20 Hz control
+    scan_every = max(1, round(0.1 / sim.timestep))  # 10 Hz lidar (a multiple of the control period)
+    step, leg, leg_t0, driven, last_xy = 0, 0, 0.0, 0.0, (x0, y0)
+    while not driver.done:
+        sim.step(ctrl_every)
+        step += ctrl_every
+        x, y, yaw, *_ = sim.ground_truth()
+        driven += math.hypot(x - last_xy[0], y - last_xy[1])
+        last_xy = (x, y)
+        if step % scan_every == 0:
+            s, o = sim.scan(), sim.odometry()
+            t = round(s.stamp, 6)
+            gt_at[t], odom_at[t] = (x, y, yaw), (o.x, o.y, o.yaw)
+            ranges = np.asarray(s.ranges, dtype=np.float32)[::st.beam_step].copy()
+            range_max = s.range_max
+            if st.max_range is not None:
+                range_max = min(range_max, st.max_range)
+                ranges[ranges > range_max] = np.inf
+            scan = Scan(ranges, s.angle_min, s.angle_increment * st.beam_step, s.range_min, range_max, s.stamp,
+                        mount, s.frame_id)
+            for lc, eng in engines.items():
+                t0 = time.perf_counter()
+                eng.process(scan, (o.x, o.y, o.yaw), s.stamp)
+                seconds[lc] += time.perf_counter() - t0
+        if driver.i != leg:
+            leg, leg_t0 = driver.i, sim.time
+        elif sim.time - leg_t0 > leg_timeout:  # stuck (should never happen): give up on the rest
+            break
+        sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
+    sim.stop()
+    drive = DriveResult(len(wps), driver.i, len(sim.collisions()), driven, sim.time, driver.max_track_error)
+    truth = sim.ground_truth_grid(cfg.resolution, min_height=robot.lidar.mount[2])
     out = []
-    for eng, lc, secs in ((pipe.slam, True, timer.seconds), (off, False, off_seconds[0])):
+    for lc, eng in engines.items():
         stamps = [round(float(t), 6) for t in eng.node_stamps()]
-        gt = np.array([pipe.gt_at_scan[t] for t in stamps]).reshape(-1, 3)
-        odom = np.array([pipe.odom_at_scan[t] for t in stamps]).reshape(-1, 3)
+        gt = np.array([gt_at[t] for t in stamps]).reshape(-1, 3)
+        odom = np.array([odom_at[t] for t in stamps]).reshape(-1, 3)
         est = eng.trajectory()
         out.append(SlamLoopResult(
-            scene=scene, loop_closure=lc, ate_rmse=ate_rmse(est, gt), odom_ate_rmse=ate_rmse(odom, gt),
+            scene=scene, setting=st.name, seed=seed, loop_closure=lc, ate_rmse=ate_rmse(est, gt),
+            odom_ate_rmse=ate_rmse(odom, gt),
             iou=occupied_iou(eng.map(), truth, tolerance_cells=1, observed_only=True), nodes=len(est),
-            scans=eng.stats.scans_received, loop_closures=eng.stats.loop_closures, slam_seconds=secs,
-            optimize_times=list(eng.optimize_times), goals=results))
+            scans=eng.stats.scans_received, loop_closures=eng.stats.loop_closures, slam_seconds=seconds[lc],
+            drive=drive, optimize_times=list(eng.optimize_times)))
     return out[0], out[1]
 
 
 def run_slam_loop(scene: str = "apartment", *, loop_closure: bool = True, seed: int = 0,
-                  route: Sequence[str] | None = None, options: PipelineOptions | None = None,
+                  route: Sequence[Waypoint] | None = None, setting: LoopSetting | None = None,
                   hard: bool = False) -> SlamLoopResult:
-    """Drive ``route`` (waypoint names; default ROUTES[scene]) and score SLAM against ground truth."""
-    on, off = run_slam_loops(scene, seed=seed, hard=hard, route=route, options=options)
+    """Drive the scripted loop and score SLAM against ground truth, with loop closure on or off."""
+    on, off = run_slam_loops(scene, seed=seed, hard=hard, route=route, setting=setting)
     return on if loop_closure else off
-
