@@ -200,7 +200,7 @@ class HolonomicController:
             return None
         tangent = self._path_yaw(max(int(np.searchsorted(self._cum, self._cum[i + j] - self._half_length)), 0),
                                  2 * self._half_length, th, ahead=True)
-        yaws = tangent + np.radians(np.arange(-40.0, 41.0, 10.0))
+        yaws = tangent + np.radians(np.arange(-90.0, 91.0, 10.0))  # holonomic: may cross a passage sideways
         poses = np.column_stack([np.full(len(yaws), pts[j, 0]), np.full(len(yaws), pts[j, 1]), yaws])
         fc = costmap.footprint_costs(poses, self._points, outside=0).astype(float)
         fc[fc == NO_INFORMATION] = 0.0
@@ -343,6 +343,12 @@ class HolonomicController:
         for u, v0, a in zip(cmd, vel, (c.acc_lim_x, c.acc_lim_y, c.acc_lim_theta), strict=True):
             out.append(float(np.clip(u, v0 - a * dt, v0 + a * dt)))
         return out[0], out[1], out[2]
+
+    def footprint_cost_sums(self, poses: NDArray[np.float64], costmap: Costmap) -> NDArray[np.float64]:
+        """Summed costmap cost under the footprint outline at each pose (N, 3); lethal cells weigh heavily."""
+        fc = costmap.footprint_costs(poses, self._points, outside=0).astype(float)
+        fc[fc == NO_INFORMATION] = 0.0
+        return 1e4 * (fc == LETHAL).sum(axis=1) + fc.sum(axis=1)
 
     def trajectory_hits(self, cands: NDArray[np.float64], pose: tuple[float, float, float],
                         costmap: Costmap, horizon: float | None = None) -> NDArray[np.bool_]:

@@ -104,11 +104,34 @@ class Wait(Behavior):
 
 
 class BackUp(Behavior):
+    """Back away from what blocks the robot. A holonomic base is not limited to body-backwards (which may
+    point into the very wall it touches): it takes the body-frame direction, straight back first, that adds
+    no new contact and leaves the footprint in the lowest cost, and holds it for ``backup_dist``."""
+
     name = "backup"
+    #: Candidate directions (body frame, rad), in order of preference: back, oblique back, sideways, oblique.
+    DIRECTIONS = tuple(math.radians(a) for a in (180, 135, -135, 90, -90, 45, -45))
 
     def start(self, now: float, pose: Pose) -> None:
         super().start(now, pose)
         self._origin = (pose[0], pose[1])
+        self._dir: tuple[float, float] | None = None
+
+    def _choose(self, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> tuple[float, float] | None:
+        c = self.cfg
+        cands = np.array([[c.backup_speed * math.cos(a), c.backup_speed * math.sin(a), 0.0] for a in self.DIRECTIONS])
+        horizon = min(c.simulate_ahead_time, c.backup_dist / c.backup_speed)
+        hits = ctrl.trajectory_hits(cands, pose, costmap, horizon)
+        cth, sth = math.cos(pose[2]), math.sin(pose[2])
+        d = c.backup_dist / c.backup_speed
+        ends = np.array([[pose[0] + (cth * v[0] - sth * v[1]) * d, pose[1] + (sth * v[0] + cth * v[1]) * d, pose[2]]
+                         for v in cands])
+        cost = ctrl.footprint_cost_sums(ends, costmap)
+        best = None
+        for k in range(len(cands)):  # preference order breaks ties; straight back wins unless it is worse
+            if not hits[k] and (best is None or cost[k] < cost[best] - 1e-9):
+                best = k
+        return None if best is None else (float(cands[best, 0]), float(cands[best, 1]))
 
     def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
         c = self.cfg
@@ -117,10 +140,14 @@ class BackUp(Behavior):
             return Step(done=True, detail=f"backed up {moved:.2f} m")
         if self._timed_out(now):
             return Step(done=True, ok=False, detail="backup timed out")
+        if self._dir is None:
+            self._dir = self._choose(pose, costmap, ctrl)
+            if self._dir is None:
+                return Step(done=True, ok=False, detail="backup would collide in every direction")
         horizon = min(c.simulate_ahead_time, (c.backup_dist - moved) / c.backup_speed)
-        if ctrl.trajectory_hits(np.array([[-c.backup_speed, 0.0, 0.0]]), pose, costmap, horizon)[0]:
+        if ctrl.trajectory_hits(np.array([[self._dir[0], self._dir[1], 0.0]]), pose, costmap, horizon)[0]:
             return Step(done=True, ok=False, detail="backup would collide")
-        return Step(-c.backup_speed, 0.0, 0.0)
+        return Step(self._dir[0], self._dir[1], 0.0)
 
 
 class RecoverySequence:

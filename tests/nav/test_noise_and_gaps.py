@@ -104,3 +104,28 @@ def test_controller_lines_up_with_a_gap_entered_diagonally() -> None:
         assert not footprint_collides(grid, (x, y, th)), (x, y, th)
     assert gc.is_goal_reached((x, y, th), goal), ((x, y, th), blocked)
     assert blocked == 0
+
+
+def test_backup_moves_away_from_a_wall_it_touches_not_into_it() -> None:
+    """Body-backwards points into the wall here (yaw -90°: back = +y, the wall is at +y); a holonomic
+    backup must pick a direction that leaves the contact instead of refusing or pushing into it."""
+    import numpy as np
+
+    from nav2_wrapper.core.controller import ControllerConfig, HolonomicController
+    from nav2_wrapper.core.costmap import Costmap, CostmapConfig
+    from nav2_wrapper.core.recoveries import BackUp, RecoveryConfig
+    from robonix_api.grid import GridMap
+
+    data = np.zeros((80, 80), np.int8)
+    data[50:52, :] = 100                     # a wall along y = 2.5 .. 2.6 m
+    cm = Costmap(CostmapConfig())
+    cm.set_static_map(GridMap(data, 0.05))
+    ctl = HolonomicController(ControllerConfig())
+    pose = (2.0, 2.5 - 0.36, -np.pi / 2)    # the long side's end touches the wall; body-back = +y
+    b = BackUp(RecoveryConfig())
+    b.start(0.0, pose)
+    step = b.step(0.0, pose, cm, ctl)
+    assert not step.done, step.detail
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    world_vy = s * step.vx + c * step.vy
+    assert world_vy < -1e-3, (step.vx, step.vy)   # away from the wall (−y), never into it
