@@ -17,6 +17,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from rbnx import procs
 from rbnx.atlas_rpc import Atlas
 from rbnx.models import ResolvedDeploy, ResolvedEntry
 from rbnx.procs import ProcGroup, proc_start_ticks, spawn, tail
@@ -213,6 +214,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     """The whole boot; returns the exit code (0 all ready, 1 some failed, 130 interrupted during boot)."""
     sig = _Signals()
     sig.install()
+    procs.set_supervised(not opts.exit_after_boot)
     opts.log_dir.mkdir(parents=True, exist_ok=True)
     spath = state_path(deploy.path)
     atlas_group: ProcGroup | None = None

@@ -6,6 +6,7 @@ package and nothing else; /proc is read directly (no psutil) to see what is stil
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
@@ -148,6 +149,21 @@ class ProcGroup:
         return "killed"
 
 
+_PR_SET_PDEATHSIG = 1
+_supervised = False
+
+
+def set_supervised(on: bool) -> None:
+    """While rbnx stays up as the supervisor, its children get SIGTERM if rbnx dies, even by SIGKILL, so a
+    killed boot leaves nothing behind. Off for ``--exit-after-boot``, where children must outlive rbnx."""
+    global _supervised
+    _supervised = on
+
+
+def _die_with_parent() -> None:  # runs in the child between fork and exec; survives exec
+    ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 def spawn(name: str, command: list[str], cwd: Path, env: Mapping[str, str], log_path: Path | None,
           append: bool = False) -> ProcGroup:
     """Start `command` in a new session with stdout+stderr to `log_path` (or inherited when None)."""
@@ -156,6 +172,7 @@ def spawn(name: str, command: list[str], cwd: Path, env: Mapping[str, str], log_
         popen = subprocess.Popen(
             command, cwd=str(cwd), env=dict(env), stdin=subprocess.DEVNULL,
             stdout=out, stderr=subprocess.STDOUT if out else None, start_new_session=True,
+            preexec_fn=_die_with_parent if _supervised else None,  # noqa: PLW1509 (main thread only)
         )
     finally:
         if out:

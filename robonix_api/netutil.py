@@ -11,7 +11,8 @@ import os
 import socket
 
 DEFAULT_BIND_HOST = "127.0.0.1"
-_WILDCARDS = {"", "0.0.0.0", "::", "[::]"}
+WILDCARD_V4 = "0.0.0.0"  # "any interface": never our default, but a user may bind it on a robot
+_WILDCARDS = {"", WILDCARD_V4, "::", "[::]"}
 
 
 def bind_host() -> str:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Stop only what start.sh started: the named container, or the PID recorded by start_native.sh.
-# Never a broad pkill.
+# Never a pattern-based kill of other processes.
 set -uo pipefail
 name="${ROBONIX_NAV2_CONTAINER:-robonix-nav2-${RBNX_INSTANCE_NAME:-nav2}}"
 run_dir="${RBNX_RUN_DIR:-${XDG_RUNTIME_DIR:-/tmp}/robonix}"

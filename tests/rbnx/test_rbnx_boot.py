@@ -126,6 +126,22 @@ def test_rbnx_shutdown_stops_a_running_boot(tmp_path: Path, minimal: tuple[Path,
         boot.kill()
 
 
+def test_sigkill_of_the_boot_leaves_nothing_behind(tmp_path: Path, minimal: tuple[Path, dict]) -> None:
+    """A supervisor killed with SIGKILL cannot run its shutdown; its children must still go away
+    (parent-death signal), or every killed boot would leak an atlas and its providers."""
+    deploy, env = minimal
+    boot = Boot(tmp_path, deploy, env, "--no-progress")
+    try:
+        boot.wait_text(SUMMARY)
+        pids, pgids = recorded(boot.state())
+        assert all(alive(p) for p in pids[1:])
+        boot.proc.send_signal(signal.SIGKILL)
+        boot.proc.wait(30)
+        wait_for(lambda: all_gone(pids, pgids), 60, "every recorded process to be gone after SIGKILL of rbnx")
+    finally:
+        boot.kill()
+
+
 def test_exit_after_boot_then_shutdown_from_state_file(tmp_path: Path, minimal: tuple[Path, dict]) -> None:
     deploy, env = minimal
     res = run(["boot", "-f", str(deploy), "--log-dir", str(tmp_path / "logs"), "--no-progress",

@@ -138,9 +138,9 @@ def test_advertise_host(monkeypatch, clean_env: None) -> None:  # type: ignore[n
 
     assert netutil.bind_host() == "127.0.0.1"
     assert netutil.advertise_host("127.0.0.1", "127.0.0.1:50051") == "127.0.0.1"
-    assert netutil.advertise_host("0.0.0.0", "127.0.0.1:50051") == "127.0.0.1"  # route source to loopback
+    assert netutil.advertise_host(netutil.WILDCARD_V4, "127.0.0.1:50051") == "127.0.0.1"  # route source to loopback
     monkeypatch.setenv("ROBONIX_ADVERTISE_HOST", "10.1.2.3")
-    assert netutil.advertise_host("0.0.0.0", "127.0.0.1:50051") == "10.1.2.3"
+    assert netutil.advertise_host(netutil.WILDCARD_V4, "127.0.0.1:50051") == "10.1.2.3"
     monkeypatch.setenv("ROBONIX_PROVIDER_BIND_HOST", "localhost")
     with pytest.raises(ValueError, match="ROBONIX_PROVIDER_BIND_HOST"):
         netutil.bind_host()
