@@ -15,7 +15,6 @@ import logging
 import math
 import threading
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,23 +22,13 @@ import numpy as np
 from robonix_api.dds import LaserScan, Odometry, SimClock, TfBroadcaster, TfBuffer, TfError
 from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
 from robonix_api.geometry import compose
+from robonix_api.upstream import Binding
 from slam_service.config import Frames
 from slam_service.core import Scan, SlamEngine
 
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
 TF_WAIT_S = 0.3  # wall time the worker waits for odom->base at the scan stamp
-
-
-@dataclass(frozen=True)
-class Binding:
-    """One resolved input: topic + QoS preset, and where it came from."""
-
-    role: str
-    topic: str
-    qos: str
-    provider_id: str = ""
-    source: str = "atlas"
 
 
 class RateLimitedLog:

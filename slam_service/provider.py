@@ -17,10 +17,11 @@ from typing import Any
 
 from robonix_api import Deferred, Err, Ok, Service
 from robonix_api.dds import OccupancyGrid
+from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
 from slam_service.contracts import MapContracts
 from slam_service.core import SlamConfig, SlamEngine
-from slam_service.loop import Binding, SlamLoop, install_engine_log_filter
+from slam_service.loop import SlamLoop, install_engine_log_filter
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id
 
 log = logging.getLogger("slam_service")
@@ -35,39 +36,12 @@ MAP_QOS = "transient_local"
 ROLES: dict[str, tuple[str, str]] = {"scan": (LIDAR, "best_effort"), "odom": (ODOM, "reliable")}
 
 
-class MissingInput(LookupError):
-    """A required contract has no provider on the atlas; the message is the Deferred reason."""
-
-
-def reader_qos(declared: str, default: str) -> str:
-    """Reader preset matching what the provider declared ("transient_local" stays latched)."""
-    q = (declared or "").strip().lower()
-    if q in ("transient_local", "latched"):
-        return "latched"
-    return q if q in ("reliable", "best_effort", "sensor_data") else default
-
-
 def resolve_inputs(atlas: Any, consumer: str, cfg: ProviderConfig) -> dict[str, Binding]:
-    """scan + odom: topic_remap wins; else find (pinned by provider_ids) -> connect -> topic + QoS."""
+    """scan + odom through the SDK's contract lookup (topic_remap wins, provider_ids pins)."""
     out: dict[str, Binding] = {}
     for role, (contract, default_qos) in ROLES.items():
-        remap = getattr(cfg.topic_remap, role)
-        if remap:
-            out[role] = Binding(role, remap, default_qos, source="topic_remap")
-            continue
-        pin = getattr(cfg.provider_ids, role)
-        caps = sorted(atlas.find_capability(contract_id=contract, transport="ros2", provider_id=pin or None),
-                      key=lambda c: c.provider_id)
-        if not caps:
-            who = f"provider {pin!r} is not on the atlas" if pin else "no provider on the atlas"
-            raise MissingInput(f"waiting for {contract} ({who})")
-        if len(caps) > 1:
-            log.warning("%s offered by %s; using %s (pin one with provider_ids.%s)", contract,
-                        ", ".join(c.provider_id for c in caps), caps[0].provider_id, role)
-        with atlas.connect_capability(consumer_id=consumer, provider_id=caps[0].provider_id, contract_id=contract,
-                                      transport="ros2") as ch:
-            declared = getattr(ch.params, "qos_profile", "") if ch.params is not None else ""
-            out[role] = Binding(role, ch.endpoint, reader_qos(declared, default_qos), caps[0].provider_id)
+        out[role] = resolve_topic(atlas, consumer, role, contract, default_qos=default_qos,
+                                  remap=getattr(cfg.topic_remap, role), pin=getattr(cfg.provider_ids, role))
     return out
 
 
@@ -125,7 +99,7 @@ class SlamProvider:
             return Err(str(exc))
         try:
             bindings = resolve_inputs(self.svc.atlas, self.svc.id, cfg)
-        except MissingInput as exc:
+        except MissingUpstream as exc:
             log.info("CMD_INIT deferred: %s", exc)
             return Deferred(str(exc))
         store = MapStore(cfg.map_dir)
