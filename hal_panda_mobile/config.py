@@ -23,6 +23,7 @@ from hal_panda_mobile.sim import (
     load_scene,
 )
 from hal_panda_mobile.sim.errors import format_validation_error
+from robonix_api.config_types import FiniteFloat, TopicName
 
 
 class _Model(BaseModel):
@@ -30,16 +31,9 @@ class _Model(BaseModel):
 
 
 class StartPose(_Model):
-    x: float
-    y: float
-    yaw: float = 0.0
-
-    @field_validator("x", "y", "yaw")
-    @classmethod
-    def _finite(cls, v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError("must be a finite number")
-        return v
+    x: FiniteFloat
+    y: FiniteFloat
+    yaw: FiniteFloat = 0.0
 
 
 class Rates(_Model):
@@ -54,18 +48,10 @@ class Rates(_Model):
 
 
 class Topics(_Model):
-    odom: str = "/odom"
-    cmd_vel: str = "/cmd_vel"
-    scan: str = "/scan"
-    ground_truth: str = "/ground_truth/odom"
-
-    @field_validator("odom", "cmd_vel", "scan", "ground_truth")
-    @classmethod
-    def _topic(cls, v: str) -> str:
-        name = v.strip()
-        if not name.lstrip("/") or " " in name:
-            raise ValueError(f"invalid topic name {v!r}")
-        return name if name.startswith("/") else "/" + name
+    odom: TopicName = "/odom"
+    cmd_vel: TopicName = "/cmd_vel"
+    scan: TopicName = "/scan"
+    ground_truth: TopicName = "/ground_truth/odom"
 
 
 class Frames(_Model):

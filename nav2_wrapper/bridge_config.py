@@ -12,6 +12,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from robonix_api.config_types import FrameName, OptionalTopicName
+
 PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
 
 
@@ -23,27 +25,13 @@ class _M(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-def _topic(v: str) -> str:
-    name = v.strip()
-    if not name:
-        return ""
-    if " " in name or not name.lstrip("/"):
-        raise ValueError(f"invalid topic name {v!r}")
-    return name if name.startswith("/") else "/" + name
-
-
 class TopicRemap(_M):
     """Per-role topic overrides; a remapped role is not looked up on the atlas."""
 
-    map: str = ""
-    odom: str = ""
-    scan: str = ""
-    scan_cloud: str = ""  # robonix key; accepted, but there is no 3-D source in this core (warned)
-
-    @field_validator("map", "odom", "scan", "scan_cloud")
-    @classmethod
-    def _check(cls, v: str) -> str:
-        return _topic(v)
+    map: OptionalTopicName = ""
+    odom: OptionalTopicName = ""
+    scan: OptionalTopicName = ""
+    scan_cloud: OptionalTopicName = ""  # robonix key; accepted, but there is no 3-D source in this core (warned)
 
 
 class ProviderIds(_M):
@@ -70,17 +58,9 @@ class DynamicSpeed(_M):
 
 
 class Frames(_M):
-    map: str = "map"
-    odom: str = "odom"
-    base: str = "base_link"
-
-    @field_validator("map", "odom", "base")
-    @classmethod
-    def _frame(cls, v: str) -> str:
-        f = v.strip().lstrip("/")
-        if not f or " " in f:
-            raise ValueError(f"invalid frame name {v!r}")
-        return f
+    map: FrameName = "map"
+    odom: FrameName = "odom"
+    base: FrameName = "base_link"
 
 
 class BridgeConfig(_M):
@@ -90,7 +70,7 @@ class BridgeConfig(_M):
     action_wait_s: float = Field(90.0, gt=0)   # how long CMD_INIT waits for the first map + odom + TF
     topic_remap: TopicRemap = TopicRemap()
     provider_ids: ProviderIds = ProviderIds()
-    velocity_output_topic: str = ""     # empty: chassis twist_in from the atlas, else /cmd_vel
+    velocity_output_topic: OptionalTopicName = ""     # empty: chassis twist_in from the atlas, else /cmd_vel
     dynamic_speed: DynamicSpeed = DynamicSpeed()
     robot_description: str = "config/panda_mobile.yaml"
     frames: Frames = Frames()
@@ -100,11 +80,6 @@ class BridgeConfig(_M):
     map_tf_timeout_s: float = Field(10.0, gt=0)
     clock_stall_s: float = Field(0.5, gt=0)    # wall s without /clock advancing before the robot is stopped
     clock_timeout_s: float = Field(10.0, gt=0)  # wall s of a stalled /clock before a run fails
-
-    @field_validator("velocity_output_topic")
-    @classmethod
-    def _vel_topic(cls, v: str) -> str:
-        return _topic(v)
 
     @field_validator("action_wait_s", "data_timeout_s", "map_tf_timeout_s", "clock_stall_s", "clock_timeout_s")
     @classmethod

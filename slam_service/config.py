@@ -14,6 +14,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
 from slam_service.core import SlamConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -33,15 +34,6 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def _topic(v: str) -> str:
-    name = v.strip()
-    if not name:
-        return ""
-    if " " in name or not name.lstrip("/"):
-        raise ValueError(f"invalid topic name {v!r}")
-    return name if name.startswith("/") else "/" + name
-
-
 class Roles(_Model):
     """Per input role (scan, odom): a topic override or a provider id pin; empty = resolve via the atlas."""
 
@@ -50,37 +42,20 @@ class Roles(_Model):
 
 
 class TopicRemap(Roles):
-    @field_validator("scan", "odom")
-    @classmethod
-    def _valid(cls, v: str) -> str:
-        return _topic(v)
+    scan: OptionalTopicName = ""
+    odom: OptionalTopicName = ""
 
 
 class Frames(_Model):
-    map: str = "map"
-    odom: str = "odom"
-    base: str = "base_link"
-
-    @field_validator("map", "odom", "base")
-    @classmethod
-    def _frame(cls, v: str) -> str:
-        name = v.strip().lstrip("/")
-        if not name or " " in name:
-            raise ValueError(f"invalid frame name {v!r}")
-        return name
+    map: FrameName = "map"
+    odom: FrameName = "odom"
+    base: FrameName = "base_link"
 
 
 class InitialPose(_Model):
-    x: float
-    y: float
-    theta: float = 0.0
-
-    @field_validator("x", "y", "theta")
-    @classmethod
-    def _finite(cls, v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError("must be a finite number")
-        return v
+    x: FiniteFloat
+    y: FiniteFloat
+    theta: FiniteFloat = 0.0
 
     def as_tuple(self) -> tuple[float, float, float]:
         return (self.x, self.y, self.theta)
