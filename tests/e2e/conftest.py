@@ -5,10 +5,9 @@ from __future__ import annotations
 import json
 import os
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+
+from support.procs import wait_until  # noqa: F401  (re-exported for the e2e tests)
 
 REPO = Path(__file__).resolve().parents[2]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
@@ -31,16 +30,7 @@ def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
     return env
 
 
-def wait_until(pred: Callable[[], Any], timeout_s: float, what: str, interval: float = 0.2) -> Any:
-    """Poll with a generous deadline: CI has two shared cores."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = pred()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(interval)
+
 
 
 def _stat(pid: int) -> list[str] | None:

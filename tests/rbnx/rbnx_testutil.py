@@ -6,9 +6,10 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
+
+from support.procs import alive, wait_until  # noqa: F401  (alive re-exported)
 
 REPO = Path(__file__).resolve().parents[2]
 MINIMAL = REPO / "examples" / "minimal"
@@ -41,20 +42,10 @@ def run(args: list[str], env: dict[str, str], cwd: Path, timeout: float = 120.0)
 
 def wait_for(pred: Callable[[], bool], timeout: float, what: str, interval: float = 0.1) -> None:
     """Poll with a generous deadline: the CI machine is shared and slow."""
-    deadline = time.monotonic() + timeout
-    while not pred():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout}s waiting for {what}")
-        time.sleep(interval)
+    wait_until(pred, timeout, what, interval)
 
 
-def alive(pid: int) -> bool:
-    """Running and not a zombie, read from /proc (no psutil)."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return False
-    return stat[stat.rfind(")") + 2] not in "ZX"
+
 
 
 def group_alive(pgid: int) -> list[int]:

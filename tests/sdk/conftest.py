@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import threading
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import Any
 
 import grpc
 import pytest
+from support.procs import wait_until  # noqa: F401  (re-exported for the sdk tests)
 
 from robonix_api.types import LifecycleState, Transport
 
@@ -82,16 +82,7 @@ class FakeAtlas:
         self.closed = True
 
 
-def wait_until(pred: Callable[[], Any], timeout_s: float = 30.0, what: str = "condition") -> Any:
-    """Poll ``pred`` until truthy; generous deadlines because the test machine is shared."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = pred()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.05)
+
 
 
 @pytest.fixture

@@ -13,6 +13,7 @@ from pathlib import Path
 import grpc
 import pytest
 from conftest import wait_until
+from support.wire import decode, f_str, f_varint, one
 
 from robonix_api import Deferred, Err, Ok, Service
 from robonix_api.atlas_client import AtlasClient
@@ -29,62 +30,17 @@ REPO = Path(__file__).resolve().parents[2]
 
 # ---------------------------------------------------------------- hand-rolled protobuf wire helpers
 
-def _varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        byte, n = n & 0x7F, n >> 7
-        out.append(byte | (0x80 if n else 0))
-        if not n:
-            return bytes(out)
-
-
 def driver_request_bytes(command: int, config_json: str = "") -> bytes:
     """Driver_Request built from field numbers: command=1 (varint), config_json=2 (string)."""
-    out = b""
-    if command:
-        out += _varint(1 << 3 | 0) + _varint(command)
-    if config_json:
-        data = config_json.encode()
-        out += _varint(2 << 3 | 2) + _varint(len(data)) + data
-    return out
-
-
-def decode_fields(buf: bytes) -> dict[int, int | bytes]:
-    """Minimal protobuf decoder (varint and length-delimited fields only)."""
-    fields: dict[int, int | bytes] = {}
-    i = 0
-
-    def varint() -> int:
-        nonlocal i
-        shift = value = 0
-        while True:
-            b = buf[i]
-            i += 1
-            value |= (b & 0x7F) << shift
-            shift += 7
-            if not b & 0x80:
-                return value
-
-    while i < len(buf):
-        key = varint()
-        number, wire = key >> 3, key & 7
-        if wire == 0:
-            fields[number] = varint()
-        elif wire == 2:
-            n = varint()
-            fields[number] = buf[i:i + n]
-            i += n
-        else:
-            raise AssertionError(f"unexpected wire type {wire}")
-    return fields
+    return (f_varint(1, command) if command else b"") + (f_str(2, config_json) if config_json else b"")
 
 
 def generic_driver(endpoint: str, command: int, config_json: str = "") -> tuple[bool, str, str]:
     with grpc.insecure_channel(endpoint) as ch:
         call = ch.unary_unary(DRIVER_PATH)  # no (de)serializers: raw bytes both ways
         reply = call(driver_request_bytes(command, config_json), timeout=30)
-    f = decode_fields(reply)
-    return bool(f.get(1, 0)), bytes(f.get(2, b"")).decode(), bytes(f.get(3, b"")).decode()
+    f = decode(reply)
+    return bool(one(f, 1, 0)), bytes(one(f, 2, b"")).decode(), bytes(one(f, 3, b"")).decode()
 
 
 # ---------------------------------------------------------------- fixtures

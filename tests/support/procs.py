@@ -29,7 +29,7 @@ MAP_PROVIDER = [sys.executable, str(REPO / "tests" / "nav_provider" / "map_provi
 INIT, ACTIVATE, DEACTIVATE, SHUTDOWN = 0, 1, 2, 3
 
 
-def wait_until(pred: Callable[[], Any], timeout_s: float, what: str | Callable[[], str],
+def wait_until(pred: Callable[[], Any], timeout_s: float = 30.0, what: str | Callable[[], str] = "condition",
                interval: float = 0.05) -> Any:
     """Poll ``pred`` until truthy and return its value; ``what`` (or its result) explains a timeout."""
     deadline = time.monotonic() + timeout_s
