@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import logging
-import os
 import sys
 
 
 def main() -> int:
-    logging.basicConfig(level=os.environ.get("HAL_LOG_LEVEL", "INFO").upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    from robonix_api.logsetup import setup_logging
+
+    setup_logging("HAL_LOG_LEVEL")
     from hal_panda_mobile.provider import build_provider
 
     hal = build_provider()

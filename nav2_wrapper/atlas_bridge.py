@@ -189,8 +189,9 @@ def build_provider(instance_id: str | None = None) -> NavProvider:
 
 
 def main() -> int:
-    logging.basicConfig(level=os.environ.get("NAV_LOG_LEVEL", "INFO").upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    from robonix_api.logsetup import setup_logging
+
+    setup_logging("NAV_LOG_LEVEL")
     provider = build_provider()
     provider.svc.run()  # blocks until CMD_SHUTDOWN or SIGTERM/SIGINT; tears down cleanly
     return 0
