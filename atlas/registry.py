@@ -45,6 +45,7 @@ log = logging.getLogger(__name__)
 
 MINT_ATTEMPTS = 16
 EPHEMERAL_PREFIX = "com.robonix.ephemeral."
+SHARED_DRIVER = "robonix/lifecycle/driver"  # the Driver under its generic name (every provider of ours)
 
 
 class RegistryError(Exception):
@@ -361,8 +362,11 @@ class Registry:
                     "ALREADY_EXISTS",
                     f"contract_id: {contract_id!r} over {transport.name} is already declared by {p.id!r}",
                 )
-            if contract_id.endswith("/driver"):
-                other = next((c for c, _ in p.caps if c.endswith("/driver") and c != contract_id), None)
+            if contract_id.endswith("/driver") and contract_id != SHARED_DRIVER:
+                # robonix rule: one driver per provider. The shared robonix/lifecycle/driver is the same
+                # Driver under its generic name, so it may stand next to the provider's <namespace>/driver.
+                other = next((c for c, _ in p.caps
+                              if c.endswith("/driver") and c not in (contract_id, SHARED_DRIVER)), None)
                 if other is not None:
                     raise RegistryError(
                         "FAILED_PRECONDITION",
@@ -488,10 +492,10 @@ class Registry:
                     f"over {transport.name}",
                 )
             if p.state == LifecycleState.TERMINATED:
-                raise RegistryError(
-                    "FAILED_PRECONDITION",
-                    f"provider_id: {provider_id!r} is TERMINATED ({p.state_detail or 'no detail'})",
-                )
+                # robonix's atlas opens the channel all the same (its record keeps the endpoints until GC);
+                # consumers that want live providers filter on state, as find_capability does.
+                log.info("connect %s -> %s: provider is TERMINATED (%s)", consumer_id, provider_id,
+                         p.state_detail or "no detail")
             ch = _Channel(
                 channel_id="ch-" + uuid.uuid4().hex,
                 consumer_id=consumer_id,

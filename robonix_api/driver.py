@@ -14,6 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import grpc
+
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 from robonix_api.result import Deferred, Err, Ok
 
@@ -71,6 +73,8 @@ def parse_config_json(text: str) -> dict[str, Any]:
         value = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ValueError(f"config_json: invalid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    except RecursionError:
+        raise ValueError("config_json: nested too deeply to parse") from None
     if not isinstance(value, dict):
         log.warning("config_json is a JSON %s, not an object; using {}", type(value).__name__)
         return {}
@@ -96,8 +100,11 @@ def call_handler(name: str, fn: Handler | None, *args: Any) -> Ok | Err | Deferr
 class Lifecycle:
     """Provider lifecycle state and the Driver command logic; one lock serializes every command.
 
-    Refused commands (illegal transition, bad config_json, unknown command) leave the state alone:
-    the request was wrong, not the provider. A handler's ``Err`` moves the provider to ERROR.
+    Refused commands (illegal transition, bad config_json) leave the state alone: the request was
+    wrong, not the provider. A handler's ``Err`` and an unknown command move the provider to ERROR, as
+    robonix's SDK does. Invalid ``config_json`` raises :class:`ValueError` out of :meth:`handle`; the gRPC
+    face turns it into INVALID_ARGUMENT (robonix's SDK lets the same parse error fail the RPC too, so the
+    outcome is the same: no reply body, state unchanged).
     """
 
     def __init__(self, push_state: PushState | None = None) -> None:
@@ -136,11 +143,14 @@ class Lifecycle:
 
     def _handle_locked(self, command: int, config_json: str, detail: str = "", force: bool = False) -> Reply:
         entry = _COMMANDS.get(command)
-        if entry is None:
+        if entry is None:  # robonix's SDK moves the provider to ERROR here too (a newer caller than us)
             known = ", ".join(f"{n}={c}" for c, n in ((CMD_INIT, "CMD_INIT"), (CMD_ACTIVATE, "CMD_ACTIVATE"),
                                                        (CMD_DEACTIVATE, "CMD_DEACTIVATE"),
                                                        (CMD_SHUTDOWN, "CMD_SHUTDOWN")))
-            return Reply(False, ERROR, f"unknown command {command} (field command; expected {known})")
+            why = f"unknown command {command} (field command; expected {known})"
+            if self._state != TERMINATED:
+                self._move(ERROR, why)
+            return Reply(False, ERROR, why)
         verb, slot, allowed, target = entry
         if self._state == target and command != CMD_INIT:
             return Reply(True, target)  # idempotent repeat (activate twice, shutdown twice)
@@ -149,10 +159,7 @@ class Lifecycle:
             return Reply(False, ERROR, f"cannot {verb}: {why} (state {self._state})")
         args: tuple[Any, ...] = ()
         if command == CMD_INIT:
-            try:
-                cfg = parse_config_json(config_json)
-            except ValueError as exc:
-                return Reply(False, ERROR, str(exc))
+            cfg = parse_config_json(config_json)  # ValueError: the RPC fails, the state stays (as in robonix)
             args = (cfg,)
         result = call_handler(slot, self.handlers.get(slot), *args)
         if isinstance(result, Deferred) and force:  # a signal cannot be postponed
@@ -193,6 +200,47 @@ class DriverServicer(robonix_contracts_pb2_grpc.RobonixLifecycleDriverServicer):
         self._lifecycle = lifecycle
 
     def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:  # noqa: N802
-        reply = self._lifecycle.handle(request.command, request.config_json)
+        try:
+            reply = self._lifecycle.handle(request.command, request.config_json)
+        except ValueError as exc:  # malformed config_json: fail the RPC, naming the field
+            log.warning("Driver(command=%d) refused: %s", request.command, exc)
+            context.abort(grpc.StatusCode.INVALID_ARGUMENT, str(exc)[:512])
         log.info("Driver(command=%d) -> ok=%s state=%s %s", request.command, reply.ok, reply.state, reply.error)
         return reply.to_proto()
+
+
+def pascal(contract_id: str) -> str:
+    """robonix-api's contract -> service name rule: ``robonix/service/map/driver`` -> ``RobonixServiceMapDriver``."""
+    return "".join(part.capitalize() for seg in contract_id.strip("/").split("/") for part in seg.split("_") if part)
+
+
+def namespace_driver_contract(namespace: str) -> str:
+    """The per-namespace driver contract robonix-api providers declare (``<namespace>/driver``)."""
+    return f"{namespace.strip('/')}/driver"
+
+
+def namespace_driver_services(namespace: str) -> tuple[str, ...]:
+    """gRPC service names under which robonix callers look for a namespace's Driver.
+
+    robonix-api 0.1.0rc1 names it after the whole contract id (``RobonixServiceNavigationDriver``);
+    robonix's ``rbnx boot`` strips the leading ``robonix/`` (``ServiceNavigationDriver``). Both are served.
+    """
+    contract = namespace_driver_contract(namespace)
+    names = [pascal(contract)]
+    if contract.startswith("robonix/"):
+        names.append(pascal(contract.removeprefix("robonix/")))
+    return tuple(dict.fromkeys(names))
+
+
+def add_namespace_driver(lifecycle: Lifecycle, namespace: str, server: grpc.Server) -> str:
+    """Serve the same Driver under the namespace's service names; returns the primary service name."""
+    servicer = DriverServicer(lifecycle)
+    handlers = {"Driver": grpc.unary_unary_rpc_method_handler(
+        servicer.Driver, request_deserializer=lifecycle_pb2.Driver_Request.FromString,
+        response_serializer=lifecycle_pb2.Driver_Response.SerializeToString)}
+    names = namespace_driver_services(namespace)
+    for name in names:
+        if name == "RobonixLifecycleDriver":
+            continue  # already served by the generated servicer
+        server.add_generic_rpc_handlers((grpc.method_handlers_generic_handler(f"robonix.contracts.{name}", handlers),))
+    return names[0]

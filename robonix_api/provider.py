@@ -23,7 +23,7 @@ import grpc
 
 from robonix_api import netutil, pkg
 from robonix_api.contracts import builtin_contract
-from robonix_api.driver import DriverServicer, Lifecycle
+from robonix_api.driver import DriverServicer, Lifecycle, add_namespace_driver, namespace_driver_contract
 from robonix_api.grpc_contracts import add_servicer, build_servicer, generated_servicer
 from robonix_api.procs import ProcessGroups
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc
@@ -234,6 +234,10 @@ class _Provider(TopicsMixin):
                 log.info("atlas assigned id %s", new_id)
                 self.id = new_id
             self._registered = True
+            # Say REGISTERED out loud: the atlas would otherwise report INACTIVE as soon as we declare a
+            # capability, which robonix's executor reads as "already initialised" (no CMD_INIT sent).
+            if self.lifecycle.state == "registered":
+                self._push_state(self.lifecycle.state, self.lifecycle.detail)
 
     def _declare_all(self, only: set[tuple[str, Transport]] | None = None) -> None:
         """Send remembered declarations (all of them, or just ``only``) to the atlas."""
@@ -259,10 +263,10 @@ class _Provider(TopicsMixin):
         log.warning("atlas does not know provider %s (restarted?); re-registering", self.id)
         with self._atlas_lock:
             self._registered = False
-            self._register_once()
+            self._register_once()  # pushes REGISTERED itself
             self._declare_all()
             state, detail = self.lifecycle.state, self.lifecycle.detail
-            if state != "registered" or detail:
+            if state != "registered":
                 self._push_state(state, detail)
         log.info("re-registered %s with %d capabilities, state %s", self.id, len(self._declared), state)
 
@@ -309,6 +313,7 @@ class _Provider(TopicsMixin):
         server = grpc.server(futures.ThreadPoolExecutor(max_workers=8, thread_name_prefix="rbnx-grpc"))
         robonix_contracts_pb2_grpc.add_RobonixLifecycleDriverServicer_to_server(
             DriverServicer(self.lifecycle), server)
+        ns_driver_service = add_namespace_driver(self.lifecycle, self.namespace, server)
         for cid, servicer in self._grpc_handlers.items():
             add_servicer(builtin_contract(cid), servicer, server)
         port = server.add_insecure_port(netutil.host_port(bind, 0))
@@ -320,6 +325,7 @@ class _Provider(TopicsMixin):
         self.declare_capability(DRIVER_CONTRACT, self.grpc_endpoint, Transport.GRPC,
                                 GrpcParams(proto_file="robonix_contracts.proto",
                                            service_name="RobonixLifecycleDriver", method="Driver"))
+        self._declare_namespace_driver(ns_driver_service)
         for cid in self._grpc_handlers:
             self.declare_grpc(cid)
         if self._mcp_handlers:
@@ -332,6 +338,24 @@ class _Provider(TopicsMixin):
         log.info("provider %s (%s) up: grpc %s%s", self.id, self.KIND.label, self.grpc_endpoint,
                  f", mcp {self.mcp_url}" if self.mcp_url else "")
         self._ready.set()
+
+    def _declare_namespace_driver(self, service_name: str) -> None:
+        """Also declare ``<namespace>/driver`` (robonix-api's name for the same Driver).
+
+        robonix's own atlas allows one ``*/driver`` per provider and refuses the second with
+        FAILED_PRECONDITION; there the shared ``robonix/lifecycle/driver`` alone stays declared.
+        """
+        contract = namespace_driver_contract(self.namespace)
+        if contract == DRIVER_CONTRACT:
+            return
+        try:
+            self.declare_capability(contract, self.grpc_endpoint, Transport.GRPC,
+                                    GrpcParams(proto_file="robonix_contracts.proto", service_name=service_name,
+                                               method="Driver"))
+        except grpc.RpcError as exc:
+            if _status_code(exc) != grpc.StatusCode.FAILED_PRECONDITION:
+                raise
+            log.info("atlas keeps one driver per provider; %s not declared (%s)", contract, exc.details())
 
     def _start_mcp(self, bind: str, host: str) -> None:
         import json

@@ -95,8 +95,10 @@ def test_driver_over_real_grpc_stub_and_raw_bytes(providers, client: AtlasClient
     assert generic_driver(endpoint, 0, '{"speed": 0.5}') == (True, "inactive", "")
     assert seen == [{"speed": 0.5}]
     wait_until(lambda: provider_record(client, "sdk_p1").state == LifecycleState.INACTIVE, what="INACTIVE")
-    ok, state, error = generic_driver(endpoint, 9)
+    ok, state, error = generic_driver(endpoint, 9)  # unknown command: ERROR, as robonix's SDK does
     assert (ok, state) == (False, "error") and "command" in error
+    assert provider_record(client, "sdk_p1").state == LifecycleState.ERROR
+    assert generic_driver(endpoint, 0, "{}") == (True, "inactive", "")
 
     stub = robonix_contracts_pb2_grpc.RobonixLifecycleDriverStub(grpc.insecure_channel(endpoint))
     r = stub.Driver(lifecycle_pb2.Driver_Request(command=lifecycle_pb2.Driver_Request.CMD_ACTIVATE), timeout=30)
@@ -111,9 +113,11 @@ def test_invalid_config_and_deferred(providers, client: AtlasClient) -> None:  #
     svc.run_in_thread()
     endpoint = driver_endpoint(client, "sdk_p1")
 
-    ok, state, error = generic_driver(endpoint, 0, '{"speed": ,}')
-    assert (ok, state) == (False, "error")
-    assert error.startswith("config_json: invalid JSON at line 1 column 11")
+    with pytest.raises(grpc.RpcError) as bad:  # the RPC fails as in robonix's SDK, with the field named
+        generic_driver(endpoint, 0, '{"speed": ,}')
+    assert bad.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert bad.value.details().startswith("config_json: invalid JSON at line 1 column 11")
+    assert provider_record(client, "sdk_p1").state == LifecycleState.REGISTERED
 
     assert generic_driver(endpoint, 0, "{}") == (False, "deferred", "waiting for robonix/primitive/lidar/lidar")
     rec = provider_record(client, "sdk_p1")
@@ -187,7 +191,7 @@ def test_reregisters_after_atlas_restart(providers, client: AtlasClient, atlas_s
         rec = wait_until(lambda: provider_record(client, "sdk_p1"), timeout_s=60, what="re-registration")
         wait_until(lambda: provider_record(client, "sdk_p1").state == LifecycleState.ACTIVE, what="ACTIVE again")
         rec = provider_record(client, "sdk_p1")
-        assert {(c.contract_id, c.transport.label) for c in rec.capabilities} == {(DRIVER, "grpc"), (NAV, "grpc")}
+        assert {(c.contract_id, c.transport.label) for c in rec.capabilities} == {(DRIVER, "grpc"), ("robonix/test/driver", "grpc"), (NAV, "grpc")}
         assert driver_endpoint(client, "sdk_p1") == svc.grpc_endpoint
     finally:
         svc.stop()

@@ -57,7 +57,19 @@ def test_register_declare_and_drive(provider, fake_atlas: FakeAtlas) -> None:  #
     assert (r.ok, r.state) == (True, "inactive")
     r = stub.Driver(lifecycle_pb2.Driver_Request(command=CMD_ACTIVATE), timeout=30)
     assert (r.ok, r.state) == (True, "active")
-    assert [s for _, s, _ in fake_atlas.states] == [LifecycleState.INACTIVE, LifecycleState.ACTIVE]
+    # REGISTERED is said at once (robonix's executor reads INACTIVE as "initialised"), then the transitions
+    assert [s for _, s, _ in fake_atlas.states] == [LifecycleState.REGISTERED, LifecycleState.INACTIVE,
+                                                     LifecycleState.ACTIVE]
+
+    # the same Driver under robonix-api's per-namespace name, at both gRPC paths robonix callers use
+    ns_drv = fake_atlas.declared[("p1", "robonix/test/driver", Transport.GRPC)]
+    assert ns_drv["params"] == GrpcParams("robonix_contracts.proto", "RobonixTestDriver", "Driver")
+    with grpc.insecure_channel(svc.grpc_endpoint) as ch:
+        for path in ("/robonix.contracts.RobonixTestDriver/Driver", "/robonix.contracts.TestDriver/Driver"):
+            call = ch.unary_unary(path, request_serializer=lifecycle_pb2.Driver_Request.SerializeToString,
+                                  response_deserializer=lifecycle_pb2.Driver_Response.FromString)
+            r = call(lifecycle_pb2.Driver_Request(command=CMD_ACTIVATE), timeout=30)
+            assert (r.ok, r.state) == (True, "active")
 
     nav_stub = robonix_contracts_pb2_grpc.RobonixServiceNavigationNavigateStub(
         grpc.insecure_channel(svc.grpc_endpoint))
@@ -102,7 +114,7 @@ def test_reregisters_when_atlas_forgets(provider, fake_atlas: FakeAtlas) -> None
     fake_atlas.forget()
     wait_until(lambda: len(fake_atlas.registrations) >= 2, what="re-registration")
     wait_until(lambda: ("p1", LifecycleState.INACTIVE, "") in fake_atlas.states[1:], what="state re-push")
-    assert {k[1] for k in fake_atlas.declared} == {DRIVER, "robonix/primitive/lidar/lidar"}
+    assert {k[1] for k in fake_atlas.declared} == {DRIVER, "robonix/test/driver", "robonix/primitive/lidar/lidar"}
     assert fake_atlas.registrations[1]["kind"] == Kind.SKILL
 
 
@@ -112,7 +124,7 @@ def test_deferred_reason_pushed(provider, fake_atlas: FakeAtlas) -> None:  # typ
     svc.run_in_thread()
     r = driver_stub(svc).Driver(lifecycle_pb2.Driver_Request(command=CMD_INIT), timeout=30)
     assert (r.ok, r.state, r.error) == (False, "deferred", "no provider of robonix/service/map/occupancy_grid")
-    assert fake_atlas.states == [("p1", LifecycleState.REGISTERED, r.error)]
+    assert fake_atlas.states == [("p1", LifecycleState.REGISTERED, ""), ("p1", LifecycleState.REGISTERED, r.error)]
 
 
 def test_identity_from_env_and_package(tmp_path: Path, monkeypatch, fake_atlas: FakeAtlas,  # type: ignore[no-untyped-def]

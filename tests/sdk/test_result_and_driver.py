@@ -90,9 +90,10 @@ def test_config_json_lenient(text: str, expected: dict) -> None:
 
 def test_invalid_config_json_names_the_problem_and_keeps_state() -> None:
     lc, pushed = make()
-    r = lc.handle(CMD_INIT, '{"a": }')
-    assert (r.ok, r.state) == (False, "error")
-    assert r.error.startswith("config_json: invalid JSON at line 1 column 7")
+    with pytest.raises(ValueError, match="config_json: invalid JSON at line 1 column 7"):
+        lc.handle(CMD_INIT, '{"a": }')
+    with pytest.raises(ValueError, match="config_json: nested too deeply"):
+        lc.handle(CMD_INIT, "[" * 100_000 + "]" * 100_000)
     assert lc.state == "registered" and pushed == []
 
 
@@ -102,9 +103,10 @@ def test_illegal_transitions_and_unknown_command() -> None:
     assert (r.ok, r.state, r.error) == (False, "error", "cannot activate: not initialized (state registered)")
     r = lc.handle(CMD_DEACTIVATE)
     assert not r.ok and "cannot deactivate" in r.error
-    r = lc.handle(7)
-    assert not r.ok and r.state == "error" and "command" in r.error and "7" in r.error
     assert lc.state == "registered" and pushed == []
+    r = lc.handle(7)  # an unknown command moves the provider to ERROR, as robonix's SDK does
+    assert not r.ok and r.state == "error" and "command" in r.error and "7" in r.error
+    assert lc.state == "error" and pushed == [("error", r.error)]
     lc.handle(CMD_INIT)
     lc.handle(CMD_ACTIVATE)
     assert "deactivate first" in lc.handle(CMD_INIT).error
