@@ -17,7 +17,6 @@ from robonix_api.proto_gen import (
     atlas_pb2,
     atlas_pb2_grpc,
     lifecycle_pb2,
-    robonix_contracts_pb2_grpc,
 )
 
 DRIVER_CONTRACT = "robonix/lifecycle/driver"
@@ -142,17 +141,38 @@ class DriverReply:
     error: str
 
 
+def driver_method_path(params: atlas_pb2.TransportParams | None) -> str:
+    """The gRPC path of a declared Driver, from its GrpcParams.
+
+    Our providers declare ``RobonixLifecycleDriver``; robonix-api packages declare their namespace's
+    driver (``RobonixPrimitiveLidarDriver``); robonix's Rust components put the full name in
+    ``service_name`` and the whole path in ``method``. All of them take the same Driver request.
+    """
+    g = params.grpc if params is not None and params.HasField("grpc") else None
+    if g is None or not g.service_name:
+        return DEFAULT_DRIVER_PATH
+    if g.method.startswith("/"):
+        return g.method
+    service = g.service_name if "." in g.service_name else f"robonix.contracts.{g.service_name}"
+    return f"/{service}/{g.method or 'Driver'}"
+
+
+DEFAULT_DRIVER_PATH = "/robonix.contracts.RobonixLifecycleDriver/Driver"
+
+
 class Driver:
     """A provider's lifecycle Driver at `host:port`; calls are futures so callers can abort them."""
 
-    def __init__(self, endpoint: str) -> None:
+    def __init__(self, endpoint: str, params: atlas_pb2.TransportParams | None = None) -> None:
         self.endpoint = endpoint.removeprefix("grpc://").removeprefix("http://")
+        self.path = driver_method_path(params)
         self._ch = grpc.insecure_channel(self.endpoint, options=GRPC_OPTIONS)
-        self._stub = robonix_contracts_pb2_grpc.RobonixLifecycleDriverStub(self._ch)
+        self._call = self._ch.unary_unary(self.path, request_serializer=lifecycle_pb2.Driver_Request.SerializeToString,
+                                          response_deserializer=lifecycle_pb2.Driver_Response.FromString)
 
     def call_async(self, command: int, config: dict[str, Any] | None, timeout: float) -> grpc.Future:
         req = lifecycle_pb2.Driver_Request(command=command, config_json="" if config is None else json.dumps(config))
-        return self._stub.Driver.future(req, timeout=timeout)
+        return self._call.future(req, timeout=timeout)
 
     def call(self, command: int, config: dict[str, Any] | None, timeout: float) -> DriverReply:
         return self.result(self.call_async(command, config, timeout))

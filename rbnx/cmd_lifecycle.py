@@ -72,8 +72,8 @@ def _driver_shutdown(atlas_addr: str | None, name: str) -> None:
             cid = driver_capability(prov) if prov else None
             if cid is None:
                 return
-            endpoint, _ = atlas.endpoint(name, cid, 1)
-        d = Driver(endpoint)
+            endpoint, params = atlas.endpoint(name, cid, 1)
+        d = Driver(endpoint, params)
         d.call(CMD.CMD_SHUTDOWN, None, 5.0)
         d.close()
     except AtlasError:

@@ -167,10 +167,10 @@ class EntryRunner:
                 self._done("active")
             return
         try:
-            endpoint, _ = atlas.endpoint(self.name, cid, 1)
+            endpoint, params = atlas.endpoint(self.name, cid, 1)
         except AtlasError:
             return
-        self.driver = Driver(endpoint)
+        self.driver = Driver(endpoint, params)
         self._send(CMD.CMD_INIT)
 
     def _send(self, cmd: int) -> None:

@@ -127,3 +127,20 @@ def test_hook_timeout_kills_group(tmp_path: Path) -> None:
     ok, how = run_hook("h", "sleep 30", tmp_path, os.environ, None, timeout=0.5)
     assert not ok and how == "timed out after 0.5s"
     assert run_hook("h", "exit 3", tmp_path, os.environ, None, timeout=30) == (False, "exit code 3")
+
+
+def test_driver_path_follows_the_declared_service() -> None:
+    """rbnx drives whatever Driver a provider declared: ours, robonix-api's per-namespace one, or Rust's."""
+    from rbnx.atlas_rpc import DEFAULT_DRIVER_PATH, driver_method_path
+    from robonix_api.proto_gen import atlas_pb2
+
+    def grpc_params(service: str, method: str) -> atlas_pb2.TransportParams:
+        return atlas_pb2.TransportParams(grpc=atlas_pb2.GrpcParams(proto_file="robonix_contracts.proto",
+                                                                   service_name=service, method=method))
+
+    assert driver_method_path(None) == DEFAULT_DRIVER_PATH
+    assert driver_method_path(atlas_pb2.TransportParams()) == DEFAULT_DRIVER_PATH
+    assert driver_method_path(grpc_params("RobonixPrimitiveLidarDriver", "Driver")) == \
+        "/robonix.contracts.RobonixPrimitiveLidarDriver/Driver"
+    assert driver_method_path(grpc_params("robonix.contracts.RobonixLifecycleDriver",
+                                          "/robonix.contracts.RobonixLifecycleDriver/Driver")) == DEFAULT_DRIVER_PATH
