@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
 import signal
 import socket
 import sys
@@ -20,6 +19,7 @@ from typing import Any
 
 import grpc
 
+from atlas import settings
 from atlas.catalogue import Catalogue
 from atlas.registry import Registry, RegistryError
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
@@ -27,7 +27,7 @@ from robonix_api.types import Kind, params_from_pb, params_to_pb
 
 log = logging.getLogger("atlas")
 
-DEFAULT_LISTEN = "127.0.0.1:50051"
+DEFAULT_LISTEN = settings.DEFAULT_LISTEN
 
 
 class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
@@ -256,16 +256,6 @@ class AtlasServer:
         self.stop(0)
 
 
-def _env_int(name: str, default: int) -> int:
-    raw = os.environ.get(name, "").strip()
-    if not raw:
-        return default
-    try:
-        return int(raw)
-    except ValueError:
-        raise ValueError(f"{name}: expected an integer, got {raw!r}") from None
-
-
 def main(argv: list[str] | None = None) -> int:
     """Console script: serve until SIGTERM/SIGINT (exit 0); bad arguments or a busy port exit 2."""
     ap = argparse.ArgumentParser(prog="robonix-atlas", description="robonix atlas registry (gRPC)")
@@ -280,32 +270,38 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--eviction-interval-ms", type=int, default=None, help="default 10000")
     ap.add_argument("--gc-after-terminated-ms", type=int, default=None, help="default 600000")
-    ap.add_argument("--log-level", default=os.environ.get("ROBONIX_LOG_LEVEL", "INFO"))
+    ap.add_argument("--log-level", default=None, help="env ROBONIX_LOG_LEVEL, default INFO")
+    ap.add_argument(
+        "--config-json", default=None, metavar="JSON",
+        help='settings as one JSON object, as robonix\'s rbnx passes system.atlas: {"listen": ..., "log": ...}; '
+        "explicit flags win",
+    )
     a = ap.parse_args(argv)
+    try:
+        cfg = settings.resolve(
+            {"listen": a.listen, "capabilities": a.capabilities, "heartbeat_timeout_ms": a.heartbeat_timeout_ms,
+             "eviction_interval_ms": a.eviction_interval_ms, "gc_after_terminated_ms": a.gc_after_terminated_ms,
+             "log_level": a.log_level},
+            a.config_json,
+        )
+    except ValueError as exc:
+        print(f"robonix-atlas: {exc}", file=sys.stderr, flush=True)
+        return 2
     logging.basicConfig(
-        level=getattr(logging, str(a.log_level).upper(), logging.INFO),
+        level=getattr(logging, cfg.log_level.upper(), logging.INFO),
         stream=sys.stderr,
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
     )
+    if cfg.ignored_keys:
+        log.warning("--config-json: ignoring unknown keys %s", ", ".join(cfg.ignored_keys))
+    log.debug("settings: %s", cfg)
     try:
-        listen = a.listen or os.environ.get("ROBONIX_ATLAS_LISTEN") or DEFAULT_LISTEN
-        caps = a.capabilities or os.environ.get("ROBONIX_ATLAS_CAPABILITIES") or ""
-        roots = [Path(p.strip()) for p in caps.split(",") if p.strip()] or None
-        hb = a.heartbeat_timeout_ms
-        ev = a.eviction_interval_ms
-        gc = a.gc_after_terminated_ms
         server = AtlasServer(
-            listen=listen,
-            catalogue_roots=roots,
-            heartbeat_timeout_ms=hb
-            if hb is not None
-            else _env_int("ROBONIX_ATLAS_HEARTBEAT_TIMEOUT_MS", 90000),
-            eviction_interval_ms=ev
-            if ev is not None
-            else _env_int("ROBONIX_ATLAS_EVICTION_INTERVAL_MS", 10000),
-            gc_after_terminated_ms=gc
-            if gc is not None
-            else _env_int("ROBONIX_ATLAS_GC_AFTER_TERMINATED_MS", 600000),
+            listen=cfg.listen,
+            catalogue_roots=cfg.catalogue_roots,
+            heartbeat_timeout_ms=cfg.heartbeat_timeout_ms,
+            eviction_interval_ms=cfg.eviction_interval_ms,
+            gc_after_terminated_ms=cfg.gc_after_terminated_ms,
         )
         address = server.start()
     except (ValueError, OSError) as exc:

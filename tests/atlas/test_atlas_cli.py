@@ -93,3 +93,38 @@ def test_busy_port_exits_2_with_one_line() -> None:
 def test_bad_listen_exits_2(listen: str) -> None:
     res = _run_fail("--listen", listen)
     assert res.returncode == 2 and "listen" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_config_json_as_robonix_rbnx_passes_it() -> None:
+    """robonix's rbnx hands system.atlas over as JSON; a robonix env_logger filter picks the level."""
+    cfg = '{"listen": "127.0.0.1:0", "log": "robonix_atlas=debug", "heartbeat_timeout_ms": 4000, "pilot": 1}'
+    proc = subprocess.Popen(_cmd("--config-json", cfg), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=_env(ROBONIX_ATLAS_LISTEN="127.0.0.1:1"))  # the JSON wins over env
+    try:
+        line = _first_line(proc)
+        assert line.startswith("atlas listening on 127.0.0.1:"), line
+        client = AtlasClient(line.split()[-1])
+        try:
+            assert client.register_primitive("json-probe", "robonix/primitive/chassis") == "json-probe"
+        finally:
+            client.close()
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=30) == 0
+        err = proc.stderr.read()
+        assert "DEBUG" in err  # the log filter took effect
+        assert "ignoring unknown keys pilot" in err
+    finally:
+        _stop(proc)
+
+
+@pytest.mark.parametrize("cfg,word", [
+    ("{listen: 1}", "invalid JSON"),
+    ("[1]", "JSON object"),
+    ('{"heartbeat_timeout_ms": -5}', "heartbeat_timeout_ms"),
+    ('{"log": "verbose"}', "log"),
+    ("[" * 50_000 + "]" * 50_000, "--config-json"),
+])
+def test_bad_config_json_exits_2_naming_the_field(cfg: str, word: str) -> None:
+    res = _run_fail("--config-json", cfg)
+    assert res.returncode == 2 and word in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
