@@ -1,7 +1,7 @@
 """Achieved real-time factor of the hal_panda_mobile sim loop *with* DDS publishing.
 
 One command: ``python bench/hal_provider_bench.py`` (prints the figure, writes
-bench/results/hal_provider.json). It runs the provider's own loop (``SimRunner`` + ``Outputs``, the code
+bench/results/hal_provider.json). It runs the provider's own loop (``SimLoop`` + ``Outputs``, the code
 ``python -m hal_panda_mobile`` runs after CMD_INIT) at real_time_factor 0 with physics 500 Hz, 10 Hz
 360-beam /scan, 50 Hz /odom + TF, 100 Hz /clock and 10 Hz ground truth (the provider's defaults), for a fixed wall time while
 the base drives circles. A subscriber in a separate process receives /scan and /odom, so the writers
@@ -55,8 +55,8 @@ WORKLOADS = {
 
 def run(seconds: float, workload: str) -> dict:
     from hal_panda_mobile.config import build_sim, parse_config
+    from hal_panda_mobile.loop import LoopRates, SimLoop
     from hal_panda_mobile.outputs import FrameNames, Outputs
-    from hal_panda_mobile.runner import LoopRates, SimRunner
     from robonix_api.dds import DdsNode, LaserScan, Odometry
 
     child = subprocess.Popen([sys.executable, __file__, "--sink"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -72,7 +72,7 @@ def run(seconds: float, workload: str) -> dict:
                           scan_pub=node.create_publisher("/scan", LaserScan, "best_effort"),
                           gt_pub=node.create_publisher("/ground_truth/odom", Odometry, "reliable"),
                           publish_clock=WORKLOADS[workload]["clock"], scan_period=0.1, noisy_odom=False)
-        runner = SimRunner(sim, outputs, LoopRates(**WORKLOADS[workload]["rates"]), real_time_factor=0.0)
+        runner = SimLoop(sim, outputs, LoopRates(**WORKLOADS[workload]["rates"]), real_time_factor=0.0)
         outputs.publish_static(sim.robot.lidar.mount, 0.0)
         time.sleep(1.0)  # discovery: the sink's readers match before the clock starts
         runner.start()

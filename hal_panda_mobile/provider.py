@@ -3,23 +3,24 @@
 Lifecycle: CMD_INIT validates the config, builds the sim, declares the topics and starts the loop
 *held* (sim time frozen, state republished at 1 Hz so frames resolve); CMD_ACTIVATE starts stepping;
 CMD_DEACTIVATE brakes the base to rest and holds again; CMD_SHUTDOWN stops the loop and closes DDS.
-A failed CMD_INIT leaves the previous session (if any) untouched and the Driver serving.
+A failed CMD_INIT leaves the previous session (if any) untouched and the Driver serving
+(``robonix_api.hosting.SessionHost`` owns that glue).
 """
 
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import dataclass
 from typing import Any
 
 from hal_panda_mobile.config import HalConfig, build_sim, parse_config
+from hal_panda_mobile.handlers import SimHandlers
+from hal_panda_mobile.loop import LoopRates, SimLoop
 from hal_panda_mobile.outputs import FrameNames, Outputs
-from hal_panda_mobile.runner import LoopRates, SimRunner
 from hal_panda_mobile.sim import PandaMobileSim, SimConfigError
-from hal_panda_mobile.sim_rpc import SimContracts
-from robonix_api import Err, Ok, Primitive
+from robonix_api import Err, Primitive
 from robonix_api.dds.messages import LaserScan, Odometry, Twist
+from robonix_api.hosting import SessionHost, serve_contracts
 
 log = logging.getLogger("hal_panda_mobile")
 
@@ -38,77 +39,75 @@ TOPIC_CONTRACTS: dict[str, tuple[str, type, str]] = {
 }
 
 
-@dataclass
-class Session:
-    """Everything one successful CMD_INIT built."""
+@dataclass(frozen=True)
+class HalSetup:
+    """What a CMD_INIT resolved before anything running was touched."""
 
     cfg: HalConfig
     sim: PandaMobileSim
-    outputs: Outputs
-    runner: SimRunner
-    subscription: Any
-    cleared_at: float = -1.0  # collisions at or before this sim time were hidden by a reset
-    spawn_count: int = 0
-
-    def close(self) -> None:
-        self.runner.stop()
-        for item in (self.subscription, self.outputs):
-            try:
-                item.close()
-            except Exception:
-                log.exception("closing %s failed", type(item).__name__)
 
 
-class HalProvider:
-    """Owns the Primitive's lifecycle handlers and the current session."""
+class HalProvider(SessionHost[HalSetup, SimLoop]):
+    """The Primitive's lifecycle: each session is one :class:`SimLoop` (plus its /cmd_vel subscription)."""
 
     def __init__(self, prim: Primitive) -> None:
+        super().__init__(prim)
         self.prim = prim
-        self.session: Session | None = None
         self._topics: dict[str, str] = {}  # contract -> topic the atlas settled on (declared once)
         self._requested: dict[str, str] = {}  # contract -> topic the config asked for
-        SimContracts(lambda: self.session).register(prim)
-        prim.on_init(self.on_init)
-        prim.on_activate(self.on_activate)
-        prim.on_deactivate(self.on_deactivate)
-        prim.on_shutdown(self.on_shutdown)
+        serve_contracts(prim, SimHandlers(self.current).table())
 
-    # ------------------------------------------------------------------ lifecycle
-    def on_init(self, cfg_dict: dict[str, Any]) -> Ok | Err:
+    def prepare(self, config: dict[str, Any]) -> HalSetup | Err:
         try:
-            cfg = parse_config(cfg_dict)
+            cfg = parse_config(config)
             self._check_topics(cfg)
             sim = build_sim(cfg)
         except SimConfigError as exc:
             return Err(str(exc))
         for w in sim.warnings:
             log.warning("%s", w)
-        if self.session is not None:  # re-INIT: the new config replaces the running session
-            self.session.close()
-            self.session = None
-        self.session = self._start_session(cfg, sim)
+        return HalSetup(cfg, sim)
+
+    def start(self, setup: HalSetup) -> SimLoop:
+        cfg, sim = setup.cfg, setup.sim
+        robot, prim = sim.robot, self.prim
+        frames = FrameNames(odom=cfg.frames.odom or robot.odom_frame,
+                            base_link=cfg.frames.base_link or robot.base_frame,
+                            laser=cfg.frames.laser or robot.lidar.frame, world=cfg.frames.world)
+        pubs = {}
+        for cid in (ODOM, LIDAR) + ((GT_ODOM,) if cfg.publish_ground_truth else ()):
+            _, msg_type, qos = TOPIC_CONTRACTS[cid]
+            pubs[cid] = prim.create_publisher(cid, topic=self._topic(cid, cfg), msg_type=msg_type, qos=qos,
+                                              declare=False)
+        scan_hz = robot.lidar.rate_hz
+        outputs = Outputs(prim.dds_node(), frames, odom_pub=pubs[ODOM], scan_pub=pubs[LIDAR],
+                          gt_pub=pubs.get(GT_ODOM), publish_clock=cfg.publish_clock, scan_period=1.0 / scan_hz,
+                          noisy_odom=not cfg.noise().is_zero)
+        rates = LoopRates(odom=cfg.rates.odom_rate_hz, scan=scan_hz,
+                          clock=cfg.rates.clock_rate_hz if cfg.publish_clock else None,
+                          ground_truth=cfg.rates.ground_truth_rate_hz if cfg.publish_ground_truth else None,
+                          hold=cfg.rates.hold_rate_hz)
+        loop = SimLoop(sim, outputs, rates, real_time_factor=cfg.real_time_factor, use_sim_time=cfg.use_sim_time)
+        outputs.publish_static(robot.lidar.mount, sim.time if cfg.use_sim_time else 0.0)
+
+        def on_twist(msg: Twist) -> None:
+            loop.cmd_vel(float(msg.linear.x), float(msg.linear.y), float(msg.angular.z),
+                         vz=float(msg.linear.z), wx=float(msg.angular.x), wy=float(msg.angular.y))
+
+        self.own(prim.create_subscription(TWIST_IN, topic=self._topic(TWIST_IN, cfg), msg_type=Twist,
+                                          callback=on_twist, qos="reliable"))
+        loop.start()
         log.info("initialized: scene %s, start %s, rtf %s", sim.scene.name, sim.scene.start.as_tuple(),
                  cfg.real_time_factor or "max")
-        return Ok()
+        return loop
 
-    def on_activate(self) -> Ok | Err:
-        if self.session is None:
-            return Err("not initialized")
-        self.session.runner.activate()
-        return Ok()
+    def activate(self, work: SimLoop) -> None:
+        work.activate()
 
-    def on_deactivate(self) -> Ok | Err:
-        if self.session is not None:
-            self.session.runner.deactivate()
-        return Ok()
+    def deactivate(self, work: SimLoop) -> None:
+        work.deactivate()
 
-    def on_shutdown(self) -> Ok:
-        if self.session is not None:
-            self.session.close()
-            self.session = None
-        return Ok()
-
-    # ------------------------------------------------------------------ building
+    # ------------------------------------------------------------------ topics
     def _check_topics(self, cfg: HalConfig) -> None:
         """A topic declared to the atlas cannot be moved (the atlas has no undeclare): say so by field."""
         for cid, (key, _, _) in TOPIC_CONTRACTS.items():
@@ -128,39 +127,7 @@ class HalProvider:
                 log.warning("atlas moved %s from %s to %s", cid, requested, self._topics[cid])
         return self._topics[cid]
 
-    def _start_session(self, cfg: HalConfig, sim: PandaMobileSim) -> Session:
-        robot, prim = sim.robot, self.prim
-        frames = FrameNames(odom=cfg.frames.odom or robot.odom_frame,
-                            base_link=cfg.frames.base_link or robot.base_frame,
-                            laser=cfg.frames.laser or robot.lidar.frame, world=cfg.frames.world)
-        pubs = {}
-        for cid in (ODOM, LIDAR) + ((GT_ODOM,) if cfg.publish_ground_truth else ()):
-            _, msg_type, qos = TOPIC_CONTRACTS[cid]
-            pubs[cid] = prim.create_publisher(cid, topic=self._topic(cid, cfg), msg_type=msg_type, qos=qos,
-                                              declare=False)
-        scan_hz = robot.lidar.rate_hz
-        outputs = Outputs(prim.dds_node(), frames, odom_pub=pubs[ODOM], scan_pub=pubs[LIDAR],
-                          gt_pub=pubs.get(GT_ODOM), publish_clock=cfg.publish_clock, scan_period=1.0 / scan_hz,
-                          noisy_odom=not cfg.noise().is_zero)
-        rates = LoopRates(odom=cfg.rates.odom_rate_hz, scan=scan_hz,
-                          clock=cfg.rates.clock_rate_hz if cfg.publish_clock else None,
-                          ground_truth=cfg.rates.ground_truth_rate_hz if cfg.publish_ground_truth else None,
-                          hold=cfg.rates.hold_rate_hz)
-        runner = SimRunner(sim, outputs, rates, real_time_factor=cfg.real_time_factor,
-                           use_sim_time=cfg.use_sim_time)
-        outputs.publish_static(robot.lidar.mount, sim.time if cfg.use_sim_time else 0.0)
-
-        def on_twist(msg: Twist) -> None:
-            runner.cmd_vel(float(msg.linear.x), float(msg.linear.y), float(msg.angular.z),
-                           vz=float(msg.linear.z), wx=float(msg.angular.x), wy=float(msg.angular.y))
-
-        sub = prim.create_subscription(TWIST_IN, topic=self._topic(TWIST_IN, cfg), msg_type=Twist,
-                                       callback=on_twist, qos="reliable")
-        runner.start()
-        return Session(cfg, sim, outputs, runner, sub)
-
 
 def build_provider(instance_id: str | None = None) -> HalProvider:
     """The Primitive (id from ``RBNX_INSTANCE_NAME``, default ``panda_mobile``) with every handler bound."""
-    prim = Primitive(instance_id or os.environ.get("RBNX_INSTANCE_NAME") or DEFAULT_ID, NAMESPACE)
-    return HalProvider(prim)
+    return HalProvider(Primitive(instance_id or DEFAULT_ID, NAMESPACE))

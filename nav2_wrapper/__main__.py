@@ -1,10 +1,6 @@
-"""``python -m nav2_wrapper``: the navigation provider (same as ``python -m nav2_wrapper.atlas_bridge``)."""
+"""``python -m nav2_wrapper``: the navigation provider (``python -m nav2_wrapper.atlas_bridge`` is an alias)."""
 
-from __future__ import annotations
-
-import sys
-
-from nav2_wrapper.atlas_bridge import main
+from robonix_api.hosting import run_provider
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(run_provider("nav2_wrapper.provider:build_provider", log_env="NAV_LOG_LEVEL"))

@@ -15,6 +15,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
+from robonix_api.validation import field_errors
 from slam_service.core import SlamConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -92,21 +93,12 @@ def resolve_path(path: str) -> Path:
     return REPO_ROOT / p
 
 
-def _format(exc: ValidationError) -> str:
-    parts = []
-    for e in exc.errors():
-        loc = ".".join(str(x) for x in e["loc"]) or "config"
-        msg = e["msg"].removeprefix("Value error, ")
-        parts.append(f"{loc}: {msg}")
-    return "; ".join(parts)
-
-
 def parse_config(raw: dict[str, Any]) -> tuple[ProviderConfig, SlamConfig]:
     """Validate the CMD_INIT dict; ConfigError names the field."""
     try:
         cfg = ProviderConfig.model_validate(raw)
     except ValidationError as exc:
-        raise ConfigError(_format(exc)) from None
+        raise ConfigError(field_errors(exc)) from None
     try:
         slam = SlamConfig.from_dict(dict(cfg.slam))
     except (TypeError, ValueError) as exc:

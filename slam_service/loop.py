@@ -1,4 +1,4 @@
-"""The processing side of the provider: scan queue -> worker thread -> SlamEngine; /map and TF map->odom.
+"""The running work of the SLAM service: scan queue -> worker thread -> SlamEngine; /map and TF map->odom.
 
 The DDS callback only queues scans (dropping the oldest when the worker is behind, counted), so a
 slow optimisation never stalls the data plane. The worker pairs each scan with the odometry pose at the
@@ -76,6 +76,8 @@ def install_engine_log_filter() -> None:
 
 
 class SlamLoop:
+    """The work of one session (see ``robonix_api.hosting``): subscriptions, worker and publisher threads."""
+
     def __init__(self, node: Any, bindings: dict[str, Binding], frames: Frames, engine: SlamEngine, map_pub: Any,
                  *, use_sim_time: bool, map_period_s: float, tf_period_s: float, queue_size: int) -> None:
         self.frames, self.bindings = frames, bindings
@@ -287,7 +289,7 @@ class SlamLoop:
             mode = self.engine.mode
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters), "engine": engine}
 
-    def close(self) -> None:
+    def close(self, reason: str = "") -> None:
         self._stop.set()
         with self._cv:
             self._cv.notify_all()

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from robonix_api.grid import GridMap, MapFileError, atomic_write, load_map_yaml, save_map_yaml
-from slam_service.core import SessionData, SessionFileError, load_session
+from slam_service.core import SessionData, SessionFileError, SlamConfig, SlamEngine, load_session
 
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
 MAP_YAML, MAP_PGM, SESSION, META = "map.yaml", "map.pgm", "session.npz", "meta.json"
@@ -133,3 +133,12 @@ class MapStore:
             shutil.rmtree(folder)
         except OSError as exc:
             raise MapStoreError(f"cannot delete {folder}: {exc.strerror or exc}") from None
+
+
+def load_engine(store: MapStore, slam_cfg: SlamConfig, map_id: str, mode: str,
+                initial_pose: tuple[float, float, float] | None) -> SlamEngine:
+    """A fresh engine on a saved map; MapStoreError (names the file) or ValueError when it cannot be used."""
+    loaded = store.load(map_id, with_session=mode == "mapping")
+    engine = SlamEngine(slam_cfg, mode)  # type: ignore[arg-type]
+    engine.load(grid=loaded.grid, session=loaded.session, mode=mode, initial_pose=initial_pose)  # type: ignore[arg-type]
+    return engine

@@ -5,24 +5,25 @@ From process start: the map RPCs (gRPC + MCP; "not initialized" before INIT) and
 CMD_INIT validates the config, resolves lidar + odom through the atlas (``Deferred`` until both have a
 provider), optionally loads a saved map, and starts the loop *paused*. ACTIVATE integrates scans;
 DEACTIVATE pauses (the last map stays latched on /map, map->odom keeps being published); SHUTDOWN
-stops the loop and closes DDS. A failed or deferred INIT leaves the previous session untouched.
+stops the loop and closes DDS. A failed or deferred INIT leaves the previous session untouched
+(``robonix_api.hosting.SessionHost`` owns that glue).
 """
 
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import dataclass
 from typing import Any
 
-from robonix_api import Deferred, Err, Ok, Service
+from robonix_api import Deferred, Err, Service
 from robonix_api.dds import OccupancyGrid
+from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
-from slam_service.contracts import MapContracts
 from slam_service.core import SlamConfig, SlamEngine
+from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
-from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id
+from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
 
 log = logging.getLogger("slam_service")
 
@@ -36,6 +37,18 @@ MAP_QOS = "transient_local"
 ROLES: dict[str, tuple[str, str]] = {"scan": (LIDAR, "best_effort"), "odom": (ODOM, "reliable")}
 
 
+@dataclass(frozen=True)
+class SlamSetup:
+    """What a CMD_INIT resolved before anything running was touched (the handlers read the first four)."""
+
+    cfg: ProviderConfig
+    slam: SlamConfig
+    store: MapStore
+    footprint: list[tuple[float, float]]
+    bindings: dict[str, Binding]
+    engine: SlamEngine  # the engine the session starts with; the loop owns it (load_map swaps it there)
+
+
 def resolve_inputs(atlas: Any, consumer: str, cfg: ProviderConfig) -> dict[str, Binding]:
     """scan + odom through the SDK's contract lookup (topic_remap wins, provider_ids pins)."""
     out: dict[str, Binding] = {}
@@ -45,53 +58,20 @@ def resolve_inputs(atlas: Any, consumer: str, cfg: ProviderConfig) -> dict[str, 
     return out
 
 
-@dataclass
-class Session:
-    """Everything one successful CMD_INIT built."""
-
-    cfg: ProviderConfig
-    slam_cfg: SlamConfig
-    store: MapStore
-    footprint: list[tuple[float, float]]
-    loop: SlamLoop
-
-    def load(self, map_id: str, mode: str, initial_pose: tuple[float, float, float] | None) -> None:
-        """Load a saved map into a fresh engine and swap it in; on any error the running one is kept."""
-        engine = load_engine(self.store, self.slam_cfg, map_id, mode, initial_pose)
-        self.loop.replace_engine(engine)
-        log.info("loaded map %r in %s mode", map_id, mode)
-
-    def close(self) -> None:
-        self.loop.close()
-
-
-def load_engine(store: MapStore, slam_cfg: SlamConfig, map_id: str, mode: str,
-                initial_pose: tuple[float, float, float] | None) -> SlamEngine:
-    """MapStoreError (names the file) or ValueError when the map cannot be used."""
-    loaded = store.load(map_id, with_session=mode == "mapping")
-    engine = SlamEngine(slam_cfg, mode)  # type: ignore[arg-type]
-    engine.load(grid=loaded.grid, session=loaded.session, mode=mode, initial_pose=initial_pose)  # type: ignore[arg-type]
-    return engine
-
-
-class SlamProvider:
-    """Owns the Service's lifecycle handlers and the current session."""
+class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
+    """The Service's lifecycle: each session is one :class:`SlamLoop` on the inputs INIT resolved."""
 
     def __init__(self, svc: Service) -> None:
+        super().__init__(svc)
         self.svc = svc
-        self.session: Session | None = None
         install_engine_log_filter()
-        self._map_pub: Any = None
+        self._map_pub: Any = None  # one /map writer for the process: its latched map outlives sessions
         self.map_topic = svc.declare_ros2_topic(OCCUPANCY_GRID, MAP_TOPIC, qos=MAP_QOS)
-        MapContracts(lambda: self.session).register(svc)
-        svc.on_init(self.on_init)
-        svc.on_activate(self.on_activate)
-        svc.on_deactivate(self.on_deactivate)
-        svc.on_shutdown(self.on_shutdown)
+        serve_contracts(svc, MapHandlers(self.current).table())
 
-    def on_init(self, raw: dict[str, Any]) -> Ok | Err | Deferred:
+    def prepare(self, config: dict[str, Any]) -> SlamSetup | Err | Deferred:
         try:
-            cfg, slam_cfg = parse_config(raw)
+            cfg, slam_cfg = parse_config(config)
             footprint = load_footprint(cfg.robot_description)
             if cfg.map_id:
                 check_id(cfg.map_id)
@@ -100,7 +80,6 @@ class SlamProvider:
         try:
             bindings = resolve_inputs(self.svc.atlas, self.svc.id, cfg)
         except MissingUpstream as exc:
-            log.info("CMD_INIT deferred: %s", exc)
             return Deferred(str(exc))
         store = MapStore(cfg.map_dir)
         if cfg.map_id:
@@ -111,41 +90,29 @@ class SlamProvider:
                 return Err(f"map_id: {exc}")
         else:
             engine = SlamEngine(slam_cfg, cfg.mode)
-        if self.session is not None:  # re-INIT replaces the running session
-            self.session.close()
-            self.session = None
-        node = self.svc.dds_node()
+        return SlamSetup(cfg, slam_cfg, store, footprint, bindings, engine)
+
+    def start(self, setup: SlamSetup) -> SlamLoop:
+        cfg, bindings = setup.cfg, setup.bindings
         if self._map_pub is None:
             self._map_pub = self.svc.create_publisher(OCCUPANCY_GRID, topic=self.map_topic, msg_type=OccupancyGrid,
                                                       qos=MAP_QOS, declare=False)
-        loop = SlamLoop(node, bindings, cfg.frames, engine, self._map_pub, use_sim_time=cfg.use_sim_time,
-                        map_period_s=cfg.map_publish_period_s, tf_period_s=cfg.tf_period_s, queue_size=cfg.scan_queue)
-        self.session = Session(cfg, slam_cfg, store, footprint, loop)
+        loop = SlamLoop(self.svc.dds_node(), bindings, cfg.frames, setup.engine, self._map_pub,
+                        use_sim_time=cfg.use_sim_time, map_period_s=cfg.map_publish_period_s,
+                        tf_period_s=cfg.tf_period_s, queue_size=cfg.scan_queue)
+        scan, odom = bindings["scan"], bindings["odom"]
         log.info("initialized: mode %s, scan %s (%s, %s), odom %s (%s, %s), map %s, map_dir %s", cfg.mode,
-                 bindings["scan"].topic, bindings["scan"].qos, bindings["scan"].provider_id or bindings["scan"].source,
-                 bindings["odom"].topic, bindings["odom"].qos, bindings["odom"].provider_id or bindings["odom"].source,
-                 self.map_topic, store.root)
-        return Ok()
+                 scan.topic, scan.qos, scan.provider_id or scan.source, odom.topic, odom.qos,
+                 odom.provider_id or odom.source, self.map_topic, setup.store.root)
+        return loop
 
-    def on_activate(self) -> Ok | Err:
-        if self.session is None:
-            return Err("not initialized")
-        self.session.loop.set_integrating(True)
-        return Ok()
+    def activate(self, work: SlamLoop) -> None:
+        work.set_integrating(True)
 
-    def on_deactivate(self) -> Ok:
-        if self.session is not None:
-            self.session.loop.set_integrating(False)
-        return Ok()
-
-    def on_shutdown(self) -> Ok:
-        if self.session is not None:
-            self.session.close()
-            self.session = None
-        return Ok()
+    def deactivate(self, work: SlamLoop) -> None:
+        work.set_integrating(False)
 
 
 def build_provider(instance_id: str | None = None) -> SlamProvider:
     """The Service (id from ``RBNX_INSTANCE_NAME``, default ``mapping``) with every handler bound."""
-    svc = Service(instance_id or os.environ.get("RBNX_INSTANCE_NAME") or DEFAULT_ID, NAMESPACE)
-    return SlamProvider(svc)
+    return SlamProvider(Service(instance_id or DEFAULT_ID, NAMESPACE))

@@ -6,8 +6,8 @@ import time
 from typing import Any
 
 from hal_panda_mobile.config import build_sim, parse_config
+from hal_panda_mobile.loop import LoopRates, SimLoop
 from hal_panda_mobile.outputs import Snapshot
-from hal_panda_mobile.runner import LoopRates, SimRunner
 
 from .conftest import wait_until
 
@@ -27,9 +27,9 @@ class FakeOutputs:
         return [s.t for s in self.snaps if getattr(s, what)]
 
 
-def make(rtf: float, outputs: Any) -> SimRunner:
+def make(rtf: float, outputs: Any) -> SimLoop:
     sim = build_sim(parse_config({"scene": "warehouse"}))
-    return SimRunner(sim, outputs, LoopRates(odom=50.0, scan=10.0, clock=100.0, ground_truth=10.0, hold=20.0),
+    return SimLoop(sim, outputs, LoopRates(odom=50.0, scan=10.0, clock=100.0, ground_truth=10.0, hold=20.0),
                      real_time_factor=rtf)
 
 

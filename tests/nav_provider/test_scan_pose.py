@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 
-from nav2_wrapper.bridge_config import Frames
-from nav2_wrapper.bridge_inputs import Inputs
+from nav2_wrapper.config import Frames
+from nav2_wrapper.inputs import Inputs
 from robonix_api.dds import LaserScan, TfBuffer
 from robonix_api.dds.convert import laser_scan
 

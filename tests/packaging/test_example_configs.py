@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from hal_panda_mobile.config import parse_config as parse_hal
-from nav2_wrapper.bridge_config import parse_config as parse_nav
+from nav2_wrapper.config import parse_config as parse_nav
 from rbnx.models import load_deploy
 from slam_service.config import parse_config as parse_slam
 

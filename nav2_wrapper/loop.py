@@ -1,4 +1,4 @@
-"""The control loop thread and the goal API around the (not thread-safe) Navigator.
+"""The running work of navigation: the control loop thread and the goal API around the Navigator.
 
 One lock guards the navigator: gRPC/MCP handlers call ``navigate``/``cancel``/``status`` while the loop
 ticks at the controller frequency on the provider's clock (sim time with ``use_sim_time``, so a
@@ -26,10 +26,10 @@ from robonix_api.dds import FrameNotFoundError, Path, TfError
 from robonix_api.dds.convert import header, pose_stamped, twist
 from robonix_api.geometry import compose
 
-from .bridge_config import BridgeConfig
-from .bridge_goals import PlanarGoal
-from .bridge_inputs import Inputs, RobotState
-from .bridge_speed import SpeedLimits
+from .config import ProviderConfig
+from .goals import PlanarGoal
+from .inputs import Inputs, RobotState
+from .speed import SpeedLimits
 
 log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
@@ -42,7 +42,7 @@ class Publishers:
 
 
 class NavLoop:
-    def __init__(self, nav: Navigator, inputs: Inputs, pubs: Publishers, cfg: BridgeConfig, speed: SpeedLimits,
+    def __init__(self, nav: Navigator, inputs: Inputs, pubs: Publishers, cfg: ProviderConfig, speed: SpeedLimits,
                  upstream_ok: Callable[[], str] | None = None) -> None:
         self.nav, self.inputs, self.pubs, self.cfg, self.speed = nav, inputs, pubs, cfg, speed
         self.period = 1.0 / nav.cfg.navigator.controller_frequency
@@ -100,6 +100,14 @@ class NavLoop:
                 t.join(5.0)
         if self._thread.ident is not None:  # never started (failed INIT): nothing was ever commanded
             self.publish_zero()
+
+    def close(self, reason: str = "") -> None:
+        """End of the session (``reason`` e.g. "re-initialized"): stop the loop, then the inputs and outputs."""
+        self.stop(f"canceled: navigation {reason}" if reason else "canceled: navigation shutting down")
+        self.inputs.close()
+        for p in (self.pubs.cmd_vel, self.pubs.plan):
+            if p is not None:
+                p.close()
 
     # ---- goal API (handler threads) ----------------------------------------------------------------
     def navigate(self, goal: PlanarGoal | str) -> tuple[GoalRecord | None, str]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .bridge_config import DynamicSpeed
+from .config import DynamicSpeed
 
 FASTER, SLOWER, NORMAL = "faster", "slower", "normal"
 

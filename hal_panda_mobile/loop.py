@@ -1,4 +1,5 @@
-"""The sim loop thread: steps physics in chunks, paces to ``real_time_factor``, publishes on sim time.
+"""The running work of the HAL: one thread steps physics in chunks, paces to ``real_time_factor`` and
+publishes on sim time. A :class:`SimLoop` is the work of one session (see ``robonix_api.hosting``).
 
 One thread owns the (not thread-safe) simulator; RPC handlers and the /cmd_vel callback reach it
 through ``call()``, which takes the same lock the loop holds while stepping one chunk (<= one clock
@@ -23,7 +24,7 @@ from typing import Any, TypeVar
 from hal_panda_mobile.outputs import Outputs, Snapshot
 from hal_panda_mobile.sim import PandaMobileSim
 
-log = logging.getLogger("hal_panda_mobile.runner")
+log = logging.getLogger("hal_panda_mobile.loop")
 T = TypeVar("T")
 
 HELD, ACTIVE, BRAKING, STOPPED = "held", "active", "braking", "stopped"
@@ -65,13 +66,17 @@ class LoopStats:
                 "cmd_ignored": self.cmd_ignored, **self.extra}
 
 
-class SimRunner:
+class SimLoop:
+    """Owns the simulator and its outputs for one session; ``close()`` stops the thread and the writers."""
+
     def __init__(self, sim: PandaMobileSim, outputs: Outputs, rates: LoopRates, *, real_time_factor: float,
                  use_sim_time: bool = True) -> None:
         self.sim, self.outputs, self.rates = sim, outputs, rates
         self.rtf = real_time_factor
         self.use_sim_time = use_sim_time
         self.stats = LoopStats()
+        self.cleared_at = -1.0  # collisions at or before this sim time were hidden by a reset
+        self.spawn_count = 0  # boxes spawned so far (names the next unnamed one)
         self._lock = threading.RLock()
         self._wake = threading.Event()
         self._mode = HELD
@@ -111,6 +116,11 @@ class SimRunner:
         self._wake.set()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
             self._thread.join(timeout_s)
+
+    def close(self, reason: str = "") -> None:
+        """End of the session: stop the loop, then release the DDS writers."""
+        self.stop()
+        self.outputs.close()
 
     def call(self, fn: Callable[[PandaMobileSim], T], *, republish: bool = False) -> T:
         """Run ``fn(sim)`` under the sim lock; ``republish`` pushes the new state out at once."""

@@ -10,28 +10,21 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 from collections.abc import Callable
 from typing import Any
 
 import grpc
 
-from robonix_api import Service, StatusError
+from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
+from robonix_api.validation import require_finite
 from slam_service.core import SlamEngine, render_map_png
-from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id
+from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
 
-log = logging.getLogger("slam_service.contracts")
+log = logging.getLogger("slam_service.handlers")
 NS = "robonix/service/map/"
 NOT_INIT = "not initialized (send CMD_INIT)"
 MODES = ("mapping", "localization")
-
-
-def _finite(req: Any, *names: str) -> None:
-    for n in names:
-        v = getattr(req, n)
-        if not math.isfinite(v):
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{n}: must be a finite number, got {v}")
 
 
 def _map_id(map_id: str) -> str:
@@ -41,20 +34,21 @@ def _map_id(map_id: str) -> str:
         raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, str(exc)) from None
 
 
-class MapContracts:
-    """Handlers bound to whatever session the provider has (``session()`` returns None before INIT)."""
+class MapHandlers:
+    """Handlers bound to whatever session the provider has (``session()`` returns None before INIT).
+
+    A session's ``setup`` is the provider's ``SlamSetup`` (config, map store, footprint) and its ``work``
+    the running :class:`~slam_service.loop.SlamLoop`.
+    """
 
     def __init__(self, session: Callable[[], Any]) -> None:
         self._session = session
 
-    def register(self, svc: Service) -> None:
-        table = {"save_map": self.save_map, "load_map": self.load_map, "list_maps": self.list_maps,
-                 "delete_map": self.delete_map, "switch_mode": self.switch_mode, "get_mode": self.get_mode,
-                 "get_pose": self.get_pose, "reset_map": self.reset_map, "pose_estimate": self.pose_estimate,
-                 "map_card": self.map_card}
-        for name, fn in table.items():
-            svc.grpc(NS + name)(fn)
-            svc.mcp(NS + name)(fn)
+    def table(self) -> dict[str, Callable[..., Any]]:
+        """contract id -> handler, for ``robonix_api.hosting.serve_contracts``."""
+        return {NS + name: getattr(self, name) for name in (
+            "save_map", "load_map", "list_maps", "delete_map", "switch_mode", "get_mode", "get_pose", "reset_map",
+            "pose_estimate", "map_card")}
 
     # ---------------------------------------------------------------- maps on disk
     def save_map(self, req: map_pb2.SaveMap_Request) -> map_pb2.SaveMap_Response:
@@ -63,8 +57,8 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
-        with s.loop.lock:  # consistent grid + session; scans wait meanwhile
-            engine: SlamEngine = s.loop.engine
+        with s.work.lock:  # consistent grid + session; scans wait meanwhile
+            engine: SlamEngine = s.work.engine
             grid = engine.map()
             session = engine.session() if engine.graph.n_nodes else None
         writer = None
@@ -74,7 +68,7 @@ class MapContracts:
             def writer(path: Any) -> None:
                 save_session(session, path)
         try:
-            path = s.store.save(map_id, grid, writer, req.note)
+            path = s.setup.store.save(map_id, grid, writer, req.note)
         except MapStoreError as exc:
             log.warning("save_map: %s", exc)
             return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=str(exc))
@@ -88,16 +82,18 @@ class MapContracts:
         if mode not in MODES:
             raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {mode!r}")
         if req.has_initial_pose:
-            _finite(req, "x", "y", "theta")
+            require_finite(req, "x", "y", "theta")
         s = self._session()
         if s is None:
             return map_pb2.LoadMap_Response(ok=False, detail=NOT_INIT)
         pose = (req.x, req.y, req.theta) if req.has_initial_pose else None
         try:
-            s.load(map_id, mode, pose)
+            engine = load_engine(s.setup.store, s.setup.slam, map_id, mode, pose)
         except (MapStoreError, ValueError) as exc:
             log.warning("load_map: %s", exc)
             return map_pb2.LoadMap_Response(ok=False, detail=str(exc))
+        s.work.replace_engine(engine)  # only once the map loaded: on any error the running engine is kept
+        log.info("loaded map %r in %s mode", map_id, mode)
         return map_pb2.LoadMap_Response(ok=True, detail=f"loaded {map_id!r} in {mode} mode"
                                         + (f" at ({req.x:g}, {req.y:g}, {req.theta:g})" if pose else ""))
 
@@ -106,7 +102,7 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.ListMaps_Response(ok=False, detail=NOT_INIT, maps_json="[]")
-        store: MapStore = s.store
+        store: MapStore = s.setup.store
         maps = store.list()
         return map_pb2.ListMaps_Response(ok=True, detail=f"{len(maps)} map(s) in {store.root}",
                                          maps_json=json.dumps(maps))
@@ -118,7 +114,7 @@ class MapContracts:
         if s is None:
             return map_pb2.DeleteMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
         try:
-            s.store.delete(map_id)
+            s.setup.store.delete(map_id)
         except MapStoreError as exc:
             return map_pb2.DeleteMap_Response(ok=False, map_id=map_id, detail=str(exc))
         return map_pb2.DeleteMap_Response(ok=True, map_id=map_id, detail="deleted")
@@ -132,12 +128,12 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.SwitchMode_Response(ok=False, detail=NOT_INIT)
-        with s.loop.lock:
+        with s.work.lock:
             try:
-                s.loop.engine.set_mode(mode)
+                s.work.engine.set_mode(mode)
             except ValueError as exc:
                 return map_pb2.SwitchMode_Response(ok=False, detail=str(exc))
-        s.loop.map_changed()
+        s.work.map_changed()
         return map_pb2.SwitchMode_Response(ok=True, detail=f"mode {mode}")
 
     def get_mode(self, req: map_pb2.GetMode_Request) -> map_pb2.GetMode_Response:
@@ -145,7 +141,7 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.GetMode_Response(ok=False, detail=NOT_INIT)
-        st = s.loop.stats()
+        st = s.work.stats()
         return map_pb2.GetMode_Response(ok=True, mode=st["mode"], detail=json.dumps(st))
 
     def get_pose(self, req: map_pb2.GetPose_Request) -> map_pb2.GetPose_Response:
@@ -153,9 +149,9 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.GetPose_Response(ok=False, detail=NOT_INIT)
-        x, y, th = s.loop.robot_pose()
-        n = s.loop.engine.stats.scans_integrated
-        return map_pb2.GetPose_Response(ok=True, x=x, y=y, theta=th, frame_id=s.cfg.frames.map,
+        x, y, th = s.work.robot_pose()
+        n = s.work.engine.stats.scans_integrated
+        return map_pb2.GetPose_Response(ok=True, x=x, y=y, theta=th, frame_id=s.setup.cfg.frames.map,
                                         detail=f"{n} scan(s) integrated")
 
     def reset_map(self, req: map_pb2.ResetMap_Request) -> map_pb2.ResetMap_Response:
@@ -163,18 +159,18 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.ResetMap_Response(ok=False, detail=NOT_INIT)
-        with s.loop.lock:
-            s.loop.engine.reset()
-        s.loop.map_changed()
+        with s.work.lock:
+            s.work.engine.reset()
+        s.work.map_changed()
         return map_pb2.ResetMap_Response(ok=True, detail="map cleared")
 
     def pose_estimate(self, req: map_pb2.PoseEstimate_Request) -> map_pb2.PoseEstimate_Response:
         """Set the robot's map-frame pose (applied at the next scan), e.g. to relocalize."""
-        _finite(req, "x", "y", "theta")
+        require_finite(req, "x", "y", "theta")
         s = self._session()
         if s is None:
             return map_pb2.PoseEstimate_Response(ok=False, detail=NOT_INIT)
-        s.loop.set_pose((req.x, req.y, req.theta))
+        s.work.set_pose((req.x, req.y, req.theta))
         return map_pb2.PoseEstimate_Response(ok=True, detail=f"pose set to ({req.x:g}, {req.y:g}, {req.theta:g}); "
                                                              "applied at the next scan")
 
@@ -184,17 +180,17 @@ class MapContracts:
         s = self._session()
         if s is None:
             return map_pb2.GetMapCard_Response(ok=False, detail=NOT_INIT)
-        with s.loop.lock:
-            engine: SlamEngine = s.loop.engine
+        with s.work.lock:
+            engine: SlamEngine = s.work.engine
             grid = engine.map()
             traj = engine.trajectory() if engine.mode == "mapping" else None
             has_pose = engine.stats.scans_received > 0 or engine.mode == "localization"
-        pose = s.loop.robot_pose() if has_pose else None
-        png = render_map_png(grid, pose, s.footprint if pose is not None else None, traj)
-        flat = [v for xy in s.footprint for v in xy]
+        pose = s.work.robot_pose() if has_pose else None
+        png = render_map_png(grid, pose, s.setup.footprint if pose is not None else None, traj)
+        flat = [v for xy in s.setup.footprint for v in xy]
         resp = map_pb2.GetMapCard_Response(ok=True, detail=f"mode {engine.mode}", png=png, width=grid.width,
                                            height=grid.height, resolution=grid.resolution, origin_x=grid.origin_x,
-                                           origin_y=grid.origin_y, frame_id=s.cfg.frames.map,
+                                           origin_y=grid.origin_y, frame_id=s.setup.cfg.frames.map,
                                            has_robot_pose=pose is not None, footprint_polygon_xy=flat)
         if pose is not None:
             resp.robot_x, resp.robot_y, resp.robot_yaw = pose

@@ -10,7 +10,7 @@ from typing import Any
 
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic, still_there
 
-from .bridge_config import BridgeConfig
+from .config import ProviderConfig
 
 __all__ = ["Binding", "MissingUpstream", "resolve", "still_there"]
 
@@ -28,7 +28,7 @@ ROLES: dict[str, tuple[str, bool, str]] = {  # role -> (contract, required, defa
 DEFAULT_CMD_VEL = "/cmd_vel"
 
 
-def resolve(atlas: Any, consumer: str, cfg: BridgeConfig) -> dict[str, Binding]:
+def resolve(atlas: Any, consumer: str, cfg: ProviderConfig) -> dict[str, Binding]:
     """map, odom, (scan), cmd_vel bindings; MissingUpstream for the first required role that is absent."""
     out: dict[str, Binding] = {}
     for role, (contract, required, default_qos) in ROLES.items():
@@ -42,7 +42,7 @@ def resolve(atlas: Any, consumer: str, cfg: BridgeConfig) -> dict[str, Binding]:
     return out
 
 
-def _cmd_vel(atlas: Any, consumer: str, cfg: BridgeConfig) -> Binding:
+def _cmd_vel(atlas: Any, consumer: str, cfg: ProviderConfig) -> Binding:
     if cfg.velocity_output_topic:
         return Binding("cmd_vel", cfg.velocity_output_topic, "reliable", source="config")
     b = resolve_topic(atlas, consumer, "twist_in", TWIST_IN, default_qos="reliable",

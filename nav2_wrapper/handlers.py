@@ -15,9 +15,9 @@ from nav2_wrapper.core import GoalRecord
 from nav2_wrapper.core.navigator import FAILED, TERMINAL
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 
-from .bridge_goals import parse_goal
-from .bridge_loop import NavLoop
-from .bridge_speed import SpeedResult
+from .goals import parse_goal
+from .loop import NavLoop
+from .speed import SpeedResult
 
 NS = "robonix/service/navigation/"
 NAVIGATE, STATUS, CANCEL = NS + "navigate", NS + "navigate/status", NS + "navigate/cancel"
@@ -29,7 +29,9 @@ def _r(v: float, nd: int = 3) -> float | None:
     return round(v, nd) if math.isfinite(v) else None
 
 
-class Handlers:
+class NavHandlers:
+    """The contracts' handlers; ``loop()`` is the current session's NavLoop, ``not_ready()`` why there is none."""
+
     def __init__(self, loop: Callable[[], NavLoop | None], not_ready: Callable[[], str]) -> None:
         self._loop, self._not_ready = loop, not_ready
 
@@ -145,11 +147,7 @@ class Handlers:
                 effective_percentage=pct, effective_linear_speed_mps=sp.mps(pct), scope=scope, run_id=rid,
                 detail=f"{pct:g}% of {sp.max_mps:.3f} m/s ({scope})")
 
-    def register(self, svc: Any) -> None:
-        """gRPC + MCP for every contract (before ``run()``, so they are live from process start)."""
-        for cid, fn, mcp_fn in ((NAVIGATE, self.navigate, self.navigate), (STATUS, self.status, self.status_mcp),
-                                (CANCEL, self.cancel, self.cancel), (ADJUST, self.adjust_speed, self.adjust_speed),
-                                (SET_LIMIT, self.set_speed_limit, self.set_speed_limit),
-                                (GET_LIMIT, self.get_speed_limit, self.get_speed_limit)):
-            svc.grpc(cid)(fn)
-            svc.mcp(cid)(mcp_fn)
+    def table(self) -> dict[str, Any]:
+        """contract id -> handler (or (gRPC, MCP) pair), for ``robonix_api.hosting.serve_contracts``."""
+        return {NAVIGATE: self.navigate, STATUS: (self.status, self.status_mcp), CANCEL: self.cancel,
+                ADJUST: self.adjust_speed, SET_LIMIT: self.set_speed_limit, GET_LIMIT: self.get_speed_limit}

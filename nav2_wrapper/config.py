@@ -13,11 +13,12 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from robonix_api.config_types import FrameName, OptionalTopicName
+from robonix_api.validation import field_errors
 
 PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
 
 
-class BridgeConfigError(ValueError):
+class ConfigError(ValueError):
     """The config dict is unusable; the message starts with the field path."""
 
 
@@ -63,7 +64,7 @@ class Frames(_M):
     base: FrameName = "base_link"
 
 
-class BridgeConfig(_M):
+class ProviderConfig(_M):
     params_profile: Literal["sim", "slam", "default"] = "sim"
     params_file: str = ""               # absolute or package-relative; overrides params_profile
     use_sim_time: bool = True
@@ -98,16 +99,9 @@ class BridgeConfig(_M):
         return self.resolve_path(self.params_file) if self.params_file.strip() else self.params_profile
 
 
-def parse_config(cfg: dict[str, Any] | None) -> BridgeConfig:
-    """Validate the CMD_INIT dict; BridgeConfigError lists each bad field as ``path: message``."""
+def parse_config(cfg: dict[str, Any] | None) -> ProviderConfig:
+    """Validate the CMD_INIT dict; ConfigError lists each bad field as ``path: message``."""
     try:
-        return BridgeConfig.model_validate(cfg or {})
+        return ProviderConfig.model_validate(cfg or {})
     except ValidationError as exc:
-        parts = []
-        for err in exc.errors():
-            loc = ".".join(str(p) for p in err["loc"]) or "config"
-            msg = err["msg"].removeprefix("Value error, ")
-            if err["type"] == "extra_forbidden":
-                msg = "unknown key (misspelt?)"
-            parts.append(f"{loc}: {msg}")
-        raise BridgeConfigError("; ".join(parts)) from None
+        raise ConfigError(field_errors(exc, unknown_key="unknown key (misspelt?)")) from None

@@ -20,8 +20,8 @@ from robonix_api.dds.convert import msg_to_grid
 from robonix_api.geometry import compose
 from robonix_api.grid import GridMap
 
-from .bridge_config import Frames
-from .bridge_upstream import Binding
+from .config import Frames
+from .upstream import Binding
 
 log = logging.getLogger("nav2_wrapper.inputs")
 Pose = tuple[float, float, float]

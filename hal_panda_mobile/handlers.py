@@ -12,16 +12,17 @@ and hides earlier collision events; the noise RNG streams carry on.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Callable
 from typing import Any
 
 import grpc
 
+from hal_panda_mobile.loop import SimLoop
 from hal_panda_mobile.sim import PandaMobileSim, SimConfigError
 from robonix_api import StatusError
 from robonix_api.dds.messages import Time
 from robonix_api.proto_gen import builtin_interfaces_pb2, sim_pb2
+from robonix_api.validation import require_finite
 
 PREFIX = "robonix/primitive/sim/"
 GROUND_TRUTH = PREFIX + "ground_truth"
@@ -33,53 +34,47 @@ SPAWN_OBSTACLE = PREFIX + "spawn_obstacle"
 RPC_CONTRACTS = (GROUND_TRUTH, COLLISIONS, TELEPORT, RESET, SCENE_INFO, SPAWN_OBSTACLE)
 
 
-def _finite(req: Any, *fields: str) -> None:
-    for name in fields:
-        v = getattr(req, name)
-        if not math.isfinite(v):
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: must be a finite number, got {v}")
-
-
 def _stamp(t: float) -> Any:
     msg = Time.from_sec(t)
     return builtin_interfaces_pb2.Time(sec=int(msg.sec), nanosec=int(msg.nanosec))
 
 
-class SimContracts:
+class SimHandlers:
     """Handlers bound to whatever session the provider currently has (``session()`` may return None)."""
 
     def __init__(self, session: Callable[[], Any]) -> None:
         self._session = session
 
-    def _live(self) -> Any:
+    def _live(self) -> SimLoop:
+        """The running sim loop, or FAILED_PRECONDITION before a successful CMD_INIT."""
         s = self._session()
         if s is None:
             raise StatusError(grpc.StatusCode.FAILED_PRECONDITION, "simulator not initialized (send CMD_INIT)")
-        return s
+        return s.work
 
     def ground_truth(self, req: sim_pb2.GetGroundTruth_Request) -> sim_pb2.GetGroundTruth_Response:
         """Ground-truth base pose (world frame) and body-frame velocity, at the current sim time."""
         s = self._live()
-        gt, t = s.runner.call(lambda sim: (sim.ground_truth(), sim.time))
+        gt, t = s.call(lambda sim: (sim.ground_truth(), sim.time))
         return sim_pb2.GetGroundTruth_Response(ok=True, x=gt[0], y=gt[1], theta=gt[2], vx=gt[3], vy=gt[4],
                                                wz=gt[5], sim_time=t, detail=f"scene {s.sim.scene.name}")
 
     def collisions(self, req: sim_pb2.GetCollisions_Request) -> sim_pb2.GetCollisions_Response:
         """Collision episodes of the base (first contact of each) after since_sim_time, oldest first."""
-        _finite(req, "since_sim_time")
+        require_finite(req, "since_sim_time")
         s = self._live()
         since = max(req.since_sim_time, s.cleared_at)
-        events = s.runner.call(lambda sim: sim.collisions(since))
+        events = s.call(lambda sim: sim.collisions(since))
         out = [sim_pb2.CollisionEvent(stamp=_stamp(e.time), robot_geom=e.robot_geom, other_geom=e.other_geom,
                                       x=e.x, y=e.y) for e in events]
         return sim_pb2.GetCollisions_Response(ok=True, count=len(out), events=out)
 
     def teleport(self, req: sim_pb2.Teleport_Request) -> sim_pb2.Teleport_Response:
         """Place the base at rest at (x, y, theta) in the world frame; refused if it would collide."""
-        _finite(req, "x", "y", "theta")
+        require_finite(req, "x", "y", "theta")
         s = self._live()
         try:
-            s.runner.call(lambda sim: sim.teleport(req.x, req.y, req.theta), republish=True)
+            s.call(lambda sim: sim.teleport(req.x, req.y, req.theta), republish=True)
         except SimConfigError as exc:
             return sim_pb2.Teleport_Response(ok=False, detail=str(exc))
         return sim_pb2.Teleport_Response(ok=True, detail=f"at ({req.x:g}, {req.y:g}, {req.theta:g})")
@@ -96,38 +91,35 @@ class SimContracts:
             s.cleared_at = sim.time
             return len(spawned)
 
-        removed = s.runner.call(do, republish=True)
+        removed = s.call(do, republish=True)
         return sim_pb2.ResetSim_Response(ok=True, detail=f"base at start pose; {removed} spawned obstacle(s) "
                                                          "removed; sim time kept monotonic")
 
     def scene_info(self, req: sim_pb2.GetSceneInfo_Request) -> sim_pb2.GetSceneInfo_Response:
         """Scene name, bounds, start, waypoints and obstacles (incl. spawned) as JSON, plus loop stats."""
         s = self._live()
-        info = s.runner.call(lambda sim: {**sim.scene_info(), "sim_time": sim.time})
-        info["loop"] = s.runner.stats.as_dict()
-        info["mode"] = s.runner.mode
+        info = s.call(lambda sim: {**sim.scene_info(), "sim_time": sim.time})
+        info["loop"] = s.stats.as_dict()
+        info["mode"] = s.mode
         return sim_pb2.GetSceneInfo_Response(ok=True, scene=info["name"], info_json=json.dumps(info))
 
     def spawn_obstacle(self, req: sim_pb2.SpawnObstacle_Request) -> sim_pb2.SpawnObstacle_Response:
         """Drop a static box (full sizes size_x, size_y; 0.8 m tall, so the lidar sees it) into the world."""
-        _finite(req, "x", "y", "size_x", "size_y", "yaw")
+        require_finite(req, "x", "y", "size_x", "size_y", "yaw")
         for name in ("size_x", "size_y"):
             if getattr(req, name) <= 0:
                 raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: must be > 0, got {getattr(req, name)}")
         s = self._live()
         name = req.name.strip() or f"obstacle_{s.spawn_count}"
         try:
-            s.runner.call(lambda sim: sim.spawn_box(name, req.x, req.y, req.size_x, req.size_y, req.yaw),
+            s.call(lambda sim: sim.spawn_box(name, req.x, req.y, req.size_x, req.size_y, req.yaw),
                           republish=True)
         except SimConfigError as exc:
             return sim_pb2.SpawnObstacle_Response(ok=False, detail=str(exc))
         s.spawn_count += 1
         return sim_pb2.SpawnObstacle_Response(ok=True, detail=name)
 
-    def register(self, prim: Any) -> None:
-        """Attach every handler to the provider as gRPC method and MCP tool (before ``run()``)."""
-        for cid, fn in ((GROUND_TRUTH, self.ground_truth), (COLLISIONS, self.collisions),
-                        (TELEPORT, self.teleport), (RESET, self.reset), (SCENE_INFO, self.scene_info),
-                        (SPAWN_OBSTACLE, self.spawn_obstacle)):
-            prim.grpc(cid)(fn)
-            prim.mcp(cid)(fn)
+    def table(self) -> dict[str, Callable[..., Any]]:
+        """contract id -> handler, for ``robonix_api.hosting.serve_contracts``."""
+        return {GROUND_TRUTH: self.ground_truth, COLLISIONS: self.collisions, TELEPORT: self.teleport,
+                RESET: self.reset, SCENE_INFO: self.scene_info, SPAWN_OBSTACLE: self.spawn_obstacle}
