@@ -63,8 +63,25 @@ def _load(part: str) -> tuple[str, ET.Element]:
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
-        raise DdsConfigError(f"Cyclone DDS config {label} is not well-formed XML: {exc}") from exc
+        root = _fragments(text) if label == "inline XML" else None
+        if root is None:
+            raise DdsConfigError(f"Cyclone DDS config {label} is not well-formed XML: {exc}") from exc
     return label, root
+
+
+def _fragments(text: str) -> ET.Element | None:
+    """Inline XML as Cyclone also takes it: a run of elements without one root.
+
+    ``<General>…</General><Discovery>…</Discovery>`` is what ROS 2 users paste from Cyclone's docs; Cyclone
+    reads it as the inside of ``<CycloneDDS><Domain>``. Returns None when it is not well-formed that way either.
+    """
+    body = text.strip()
+    if body.startswith("<?xml"):
+        body = body.split("?>", 1)[-1]
+    try:
+        return ET.fromstring(f"<Domain>{body}</Domain>")
+    except ET.ParseError:
+        return None
 
 
 def resolve_config() -> tuple[str, str, list[tuple[str, ET.Element]]]:

@@ -74,3 +74,21 @@ def test_bad_domain_id(monkeypatch: pytest.MonkeyPatch) -> None:
         resolve_domain_id()
     with pytest.raises(DdsConfigError, match="out of range"):
         resolve_domain_id(300)
+
+
+LOOPBACK_FRAGMENTS = ('<General><Interfaces><NetworkInterface name="lo"/></Interfaces>'
+                      "<AllowMulticast>false</AllowMulticast></General>"
+                      '<Discovery><ParticipantIndex>auto</ParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers>'
+                      "</Discovery>")
+
+
+def test_inline_fragments_without_a_root_as_cyclone_takes_them(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``<General>…</General><Discovery>…</Discovery>`` (no root element) is valid for Cyclone: ours too."""
+    monkeypatch.setenv("CYCLONEDDS_URI", LOOPBACK_FRAGMENTS)
+    cfg = effective_config()
+    assert cfg["interfaces"] == ["lo"] and cfg["multicast_disabled"] and cfg["loopback_only"], cfg
+    assert probe_runtime()["selected_interfaces"] == ["lo"]  # Cyclone itself read the fragments
+    res, _ = run_child(LOOPBACK_FRAGMENTS)
+    assert res.returncode == 0 and "OK" in res.stdout, res.stderr[-1500:]
+    res, _ = run_child("<General><Interfaces></General>")  # fragments, but not well-formed
+    assert res.returncode != 0 and "not well-formed XML" in res.stderr, res.stderr[-1500:]
