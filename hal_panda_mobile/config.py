@@ -7,7 +7,6 @@ message starts with the field path, e.g. ``rates.scan_rate_hz: must be > 0``.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -24,6 +23,9 @@ from hal_panda_mobile.sim import (
 )
 from hal_panda_mobile.sim.errors import format_validation_error
 from robonix_api.config_types import FiniteFloat, TopicName
+from robonix_api.validation import finite
+
+RealTimeFactor = finite("must be a finite number >= 0 (0 = as fast as possible)")
 
 
 class _Model(BaseModel):
@@ -71,7 +73,7 @@ class HalConfig(_Model):
     odom_noise: OdomNoise = OdomNoise()  # also "none" or "realistic" (OdomNoise.realistic())
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
     rates: Rates = Rates()
-    real_time_factor: float = Field(1.0, ge=0)  # 0: as fast as possible
+    real_time_factor: RealTimeFactor = Field(1.0, ge=0)  # 0: as fast as possible
     topics: Topics = Topics()
     frames: Frames = Frames()
     use_sim_time: bool = True
@@ -86,13 +88,6 @@ class HalConfig(_Model):
             if v not in ("realistic", "none"):
                 raise ValueError(f"must be 'none', 'realistic' or a mapping of noise fields, got {v!r}")
             return OdomNoise.realistic() if v == "realistic" else OdomNoise()
-        return v
-
-    @field_validator("real_time_factor")
-    @classmethod
-    def _finite_rtf(cls, v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError("must be a finite number >= 0 (0 = as fast as possible)")
         return v
 
     def noise(self) -> OdomNoise:

@@ -6,14 +6,13 @@ Validated with pydantic so that every error names the field at fault (``dynamic_
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from robonix_api.config_types import FrameName, OptionalTopicName
-from robonix_api.validation import field_errors
+from robonix_api.validation import Seconds, field_errors, per_role
 
 PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
 
@@ -26,22 +25,11 @@ class _M(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class TopicRemap(_M):
-    """Per-role topic overrides; a remapped role is not looked up on the atlas."""
-
-    map: OptionalTopicName = ""
-    odom: OptionalTopicName = ""
-    scan: OptionalTopicName = ""
-    scan_cloud: OptionalTopicName = ""  # robonix key; accepted, but there is no 3-D source in this core (warned)
-
-
-class ProviderIds(_M):
-    """Pin the atlas provider per role (when several offer the same contract)."""
-
-    map: str = ""
-    odom: str = ""
-    scan: str = ""
-    twist_in: str = ""
+#: ``scan_cloud`` is robonix's key: accepted, but there is no 3-D source in this core (warned).
+TopicRemap = per_role("TopicRemap", ("map", "odom", "scan", "scan_cloud"), OptionalTopicName,
+                      doc="Per-role topic overrides (a remapped role is not looked up on the atlas).")
+ProviderIds = per_role("ProviderIds", ("map", "odom", "scan", "twist_in"),
+                       doc="Pin the atlas provider per role (when several offer the same contract).")
 
 
 class DynamicSpeed(_M):
@@ -68,26 +56,19 @@ class ProviderConfig(_M):
     params_profile: Literal["sim", "slam", "default"] = "sim"
     params_file: str = ""               # absolute or package-relative; overrides params_profile
     use_sim_time: bool = True
-    action_wait_s: float = Field(90.0, gt=0)   # how long CMD_INIT waits for the first map + odom + TF
-    topic_remap: TopicRemap = TopicRemap()
-    provider_ids: ProviderIds = ProviderIds()
+    action_wait_s: Seconds = Field(90.0, gt=0)   # how long CMD_INIT waits for the first map + odom + TF
+    topic_remap: TopicRemap = TopicRemap()  # type: ignore[valid-type]
+    provider_ids: ProviderIds = ProviderIds()  # type: ignore[valid-type]
     velocity_output_topic: OptionalTopicName = ""     # empty: chassis twist_in from the atlas, else /cmd_vel
     dynamic_speed: DynamicSpeed = DynamicSpeed()
     robot_description: str = "config/panda_mobile.yaml"
     frames: Frames = Frames()
-    data_timeout_s: float = Field(1.0, gt=0)   # sim s without odom / fresh odom→base TF before a run fails
+    data_timeout_s: Seconds = Field(1.0, gt=0)   # sim s without odom / fresh odom→base TF before a run fails
     # map→odom is a slowly varying SLAM correction, republished on the SLAM provider's clock: at high
     # real-time factors it can lag by seconds of sim time without being wrong, so it has its own limit.
-    map_tf_timeout_s: float = Field(10.0, gt=0)
-    clock_stall_s: float = Field(0.5, gt=0)    # wall s without /clock advancing before the robot is stopped
-    clock_timeout_s: float = Field(10.0, gt=0)  # wall s of a stalled /clock before a run fails
-
-    @field_validator("action_wait_s", "data_timeout_s", "map_tf_timeout_s", "clock_stall_s", "clock_timeout_s")
-    @classmethod
-    def _finite(cls, v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError("must be a finite number of seconds")
-        return v
+    map_tf_timeout_s: Seconds = Field(10.0, gt=0)
+    clock_stall_s: Seconds = Field(0.5, gt=0)    # wall s without /clock advancing before the robot is stopped
+    clock_timeout_s: Seconds = Field(10.0, gt=0)  # wall s of a stalled /clock before a run fails
 
     def resolve_path(self, value: str) -> Path:
         """Absolute as given; relative to the package root otherwise (robonix convention)."""

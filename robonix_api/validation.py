@@ -1,6 +1,7 @@
 """Bad input named by its field, the same way in every provider.
 
-CMD_INIT configs are pydantic models: :func:`field_errors` turns a ``ValidationError`` into one line,
+CMD_INIT configs are pydantic models: :func:`finite` / :data:`Seconds` are their non-NaN float fields,
+:func:`field_errors` turns a ``ValidationError`` into one line,
 ``path: message; path: message``, for ``Err(...)``. Contract requests are protobuf messages:
 :func:`require_finite` answers INVALID_ARGUMENT naming the first non-finite number field.
 """
@@ -8,10 +9,10 @@ CMD_INIT configs are pydantic models: :func:`field_errors` turns a ``ValidationE
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any
 
 import grpc
-from pydantic import ValidationError
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, create_model
 
 from robonix_api.grpc_contracts import StatusError
 
@@ -28,6 +29,33 @@ def field_errors(exc: ValidationError, *, unknown_key: str | None = None) -> str
     return "; ".join(parts)
 
 
+def finite(message: str = "must be a finite number") -> Any:
+    """A float config field type that rejects NaN and ±inf with ``message`` (pair it with ``Field(gt=…)``)."""
+
+    def check(v: float) -> float:
+        if not math.isfinite(v):
+            raise ValueError(message)
+        return v
+
+    return Annotated[float, AfterValidator(check)]
+
+
+#: A duration or period in seconds: finite (bounds come from ``Field``).
+Seconds = finite("must be a finite number of seconds")
+
+
+def per_role(name: str, roles: tuple[str, ...], value_type: Any = str, *, doc: str) -> type[BaseModel]:
+    """A config block with one field per input role, default "" (unset), unknown roles rejected.
+
+    Consumers configure their inputs per role the robonix way: ``topic_remap: {scan: /front/scan}``
+    (a topic instead of an atlas lookup) and ``provider_ids: {odom: hal_1}`` (pin one provider).
+    """
+    fields: dict[str, Any] = {role: (value_type, "") for role in roles}
+    model = create_model(name, __config__=ConfigDict(extra="forbid", frozen=True), **fields)
+    model.__doc__ = doc
+    return model
+
+
 def require_finite(req: Any, *names: str) -> None:
     """StatusError(INVALID_ARGUMENT, "<name>: must be a finite number, got <v>") for NaN or ±inf."""
     for name in names:
@@ -36,4 +64,4 @@ def require_finite(req: Any, *names: str) -> None:
             raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: must be a finite number, got {v}")
 
 
-__all__ = ["field_errors", "require_finite"]
+__all__ = ["Seconds", "field_errors", "finite", "per_role", "require_finite"]

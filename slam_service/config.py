@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
-from robonix_api.validation import field_errors
+from robonix_api.validation import Seconds, field_errors, per_role
 from slam_service.core import SlamConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -35,16 +35,10 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-class Roles(_Model):
-    """Per input role (scan, odom): a topic override or a provider id pin; empty = resolve via the atlas."""
-
-    scan: str = ""
-    odom: str = ""
-
-
-class TopicRemap(Roles):
-    scan: OptionalTopicName = ""
-    odom: OptionalTopicName = ""
+ROLES = ("scan", "odom")
+TopicRemap = per_role("TopicRemap", ROLES, OptionalTopicName,
+                      doc="Per input role: a topic to read instead of looking the role up on the atlas.")
+ProviderIds = per_role("ProviderIds", ROLES, doc="Per input role: the atlas provider to pin (empty: any).")
 
 
 class Frames(_Model):
@@ -63,8 +57,8 @@ class InitialPose(_Model):
 
 
 class ProviderConfig(_Model):
-    topic_remap: TopicRemap = TopicRemap()
-    provider_ids: Roles = Roles()
+    topic_remap: TopicRemap = TopicRemap()  # type: ignore[valid-type]
+    provider_ids: ProviderIds = ProviderIds()  # type: ignore[valid-type]
     frames: Frames = Frames()
     use_sim_time: bool = True
     map_dir: str = Field(default_factory=default_map_dir)
@@ -72,17 +66,10 @@ class ProviderConfig(_Model):
     map_id: str = ""  # load this saved map at INIT
     initial_pose: InitialPose | None = None
     slam: dict[str, Any] = Field(default_factory=dict)  # SlamConfig fields
-    map_publish_period_s: float = Field(1.0, gt=0)  # rate cap of /map
+    map_publish_period_s: Seconds = Field(1.0, gt=0)  # rate cap of /map
     tf_period_s: float = Field(0.05, gt=0, le=0.1)  # map->odom republish period (wall): >= 10 Hz
     scan_queue: int = Field(4, ge=1, le=100)  # scans waiting for the worker; oldest dropped beyond
     robot_description: str = DEFAULT_ROBOT  # footprint for the map card
-
-    @field_validator("map_publish_period_s")
-    @classmethod
-    def _finite(cls, v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError("must be a finite number of seconds")
-        return v
 
 
 def resolve_path(path: str) -> Path:

@@ -3,6 +3,7 @@ naming the missing upstream contract, Err naming the bad config field or the mis
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterator
 
 import pytest
@@ -82,6 +83,15 @@ def test_init_deferred_until_upstream_appears(nav: Proc, procs) -> None:  # type
     assert "no TF map→odom" in err, err
     r = navigate.Navigate(_goal(), timeout=30)
     assert not r.accepted and "not initialized" in r.detail
+
+
+def test_package_entry_point_serves_the_same_provider(procs) -> None:  # type: ignore[no-untyped-def]
+    """``python -m nav2_wrapper`` is the entry (the fixture above runs the ``atlas_bridge`` alias)."""
+    p: Proc = procs([sys.executable, "-m", "nav2_wrapper"], "nav_entry")
+    status = p.stub(NS + "navigate/status", rpc.RobonixServiceNavigationNavigateStatusStub)
+    s = status.GetNavigationStatus(nav_pb.GetNavigationStatus_Request(), timeout=30)
+    assert (s.known, s.state) == (False, "FAILED") and s.detail == "not initialized: waiting for CMD_INIT", s.detail
+    assert p.stop() == 0 and "Traceback" not in p.log(), p.log()[-4000:]
 
 
 def test_shutdown(nav: Proc) -> None:
