@@ -1,15 +1,19 @@
-"""robonix_api: the SDK every provider uses (robonix names).
+"""robonix_api: the SDK every provider uses; an API superset of robonix-api 0.1.0rc1 (see COMPAT.md).
 
 ``ATLAS`` (the default atlas client) is resolved lazily so importing the SDK opens no connection.
+Importing the SDK also makes the bundled generated protos importable under their top-level names
+(``import map_pb2``), as robonix packages import them (:mod:`robonix_api.proto_alias`).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from robonix_api import proto_alias
 from robonix_api.grpc_contracts import StatusError
 from robonix_api.provider import Primitive, Service, Skill
 from robonix_api.result import Deferred, Err, Ok, Result
+from robonix_api.tool import mcp_contract
 from robonix_api.types import (
     Capability,
     CapabilityProvider,
@@ -43,7 +47,10 @@ __all__ = [
     "Skill",
     "StatusError",
     "Transport",
+    "mcp_contract",
 ]
+
+proto_alias.install()
 
 
 def __getattr__(name: str) -> Any:

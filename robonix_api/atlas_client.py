@@ -42,8 +42,11 @@ def default_address() -> str:
     return os.environ.get("ROBONIX_ATLAS", "").strip() or DEFAULT_ADDRESS
 
 
-class HeartbeatHandle:
-    """A background heartbeat loop; ``stop()`` ends it (and joins the thread)."""
+class HeartbeatHandle(threading.Thread):
+    """A background heartbeat loop; ``stop()`` ends it (and joins the thread).
+
+    It is the (daemon) ``threading.Thread`` itself, which is what robonix-api's ``start_heartbeat``
+    returns; ``stop()``, ``beats`` and ``on_not_found`` are this SDK's additions."""
 
     def __init__(
         self,
@@ -56,20 +59,20 @@ class HeartbeatHandle:
         self.period_s = float(period_s)
         self._client = client
         self._on_not_found = on_not_found
-        self._stop = threading.Event()
+        self._stopping = threading.Event()
         self.beats = 0  # successful heartbeats, handy for tests and diagnostics
-        self._thread = threading.Thread(target=self._run, name=f"atlas-heartbeat-{id}", daemon=True)
-        self._thread.start()
+        super().__init__(name=f"robonix-hb-{id}", daemon=True)
+        self.start()
 
     @property
     def running(self) -> bool:
-        return self._thread.is_alive()
+        return self.is_alive()
 
-    def _run(self) -> None:
+    def run(self) -> None:
         unavailable_logged = False
-        while not self._stop.wait(self.period_s):
+        while not self._stopping.wait(self.period_s):
             try:
-                self._client.heartbeat(self.id)
+                self._client.heartbeat_or_raise(self.id)
                 self.beats += 1
                 if unavailable_logged:
                     log.info("heartbeat %s: atlas %s reachable again", self.id, self._client.address)
@@ -92,9 +95,9 @@ class HeartbeatHandle:
                 log.exception("heartbeat %s: unexpected error", self.id)
 
     def stop(self, timeout: float = 5.0) -> None:
-        self._stop.set()
-        if self._thread is not threading.current_thread():
-            self._thread.join(timeout)
+        self._stopping.set()
+        if self is not threading.current_thread():
+            self.join(timeout)
 
 
 class AtlasClient:
@@ -192,6 +195,10 @@ class AtlasClient:
 
     def heartbeat(self, id: str) -> None:
         """Raises ``grpc.RpcError`` (NOT_FOUND when the atlas does not know ``id``)."""
+        self.heartbeat_or_raise(id)
+
+    def heartbeat_or_raise(self, id: str) -> None:
+        """One heartbeat, errors raised (``ATLAS.heartbeat`` swallows them, as robonix-api does)."""
         self.stub.Heartbeat(atlas_pb2.HeartbeatRequest(id=id), timeout=self.timeout)
 
     def set_state(self, id: str, state: LifecycleState | int | str, detail: str = "") -> LifecycleState:
@@ -218,14 +225,21 @@ class AtlasClient:
         self,
         provider_id: str,
         contract_id: str,
-        endpoint: str,
         transport: Transport | int | str,
+        endpoint: str | Transport | int,
         params: TransportParams | None = None,
         description: str = "",
     ) -> str:
         """Declare a capability; returns the endpoint the atlas stored (a ROS 2 name may be minted or
-        rewritten on collision). Omitted params become empty params of the transport's kind."""
-        t = Transport.parse(transport)
+        rewritten on collision). Omitted params become the transport's default params.
+
+        robonix-api's order is ``(provider_id, contract_id, transport, endpoint)``; this SDK's earlier
+        order ``(provider_id, contract_id, endpoint, transport)`` keeps working: the transport is the
+        argument that is a :class:`Transport`, an int, or a transport name (``"ros2"``, ``"grpc"``,
+        ``"mcp"``), and an endpoint never is one. ALREADY_EXISTS answers return ``endpoint`` as
+        robonix-api does.
+        """
+        t, endpoint = split_transport_endpoint(transport, endpoint)
         if params is None:
             params = default_params(t)
         req = atlas_pb2.DeclareCapabilityRequest(
@@ -237,7 +251,12 @@ class AtlasClient:
         )
         if params is not None:
             params_to_pb(params, req.params)
-        return self.stub.DeclareCapability(req, timeout=self.timeout).endpoint
+        try:
+            return self.stub.DeclareCapability(req, timeout=self.timeout).endpoint or endpoint
+        except grpc.RpcError as exc:
+            if exc.code() == grpc.StatusCode.ALREADY_EXISTS:
+                return endpoint
+            raise
 
     def query(
         self,
@@ -259,19 +278,32 @@ class AtlasClient:
         resp = self.stub.Query(req, timeout=self.timeout)
         return [CapabilityProvider.from_pb(p) for p in resp.providers]
 
+    def query_primitives(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
+                         transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+        return self.query(kind=Kind.PRIMITIVE, id=id, contract_id=contract_id,
+                          namespace_prefix=namespace_prefix, transport=transport)
+
+    def query_services(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
+                       transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+        return self.query(kind=Kind.SERVICE, id=id, contract_id=contract_id,
+                          namespace_prefix=namespace_prefix, transport=transport)
+
+    def query_skills(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
+                     transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+        return self.query(kind=Kind.SKILL, id=id, contract_id=contract_id,
+                          namespace_prefix=namespace_prefix, transport=transport)
+
     def find_capability(
         self,
         *,
-        contract_id: str,
+        contract_id: str = "",
         transport: Transport | int | str | None = None,
         provider_kind: Kind | int | str | None = None,
         provider_id: str | None = None,
         namespace_prefix: str = "",
     ) -> list[Capability]:
-        """Live capabilities matching the filters (Query plus the client-side filter robonix's SDK does:
-        exact contract and transport, TERMINATED providers left out)."""
-        if not contract_id:
-            raise ValueError("contract_id: must not be empty")
+        """Live capabilities matching the filters: Query, then exact contract (when given) and transport,
+        TERMINATED providers left out. An empty ``contract_id`` lists every live capability."""
         t = Transport.parse(transport)
         out: list[Capability] = []
         for p in self.query(
@@ -284,13 +316,23 @@ class AtlasClient:
             if p.state == LifecycleState.TERMINATED:
                 continue
             for cap in p.capabilities:
-                if cap.contract_id == contract_id and (not t or cap.transport == t):
+                if (not contract_id or cap.contract_id == contract_id) and (not t or cap.transport == t):
                     out.append(cap)
         return out
 
-    def find_unique_capability(self, **filters: Any) -> Capability:
-        """Exactly one match of ``find_capability(**filters)``; ValueError naming the contract and the
+    def find_unique_capability(
+        self,
+        *,
+        contract_id: str,
+        transport: Transport | int | str | None = None,
+        provider_kind: Kind | int | str | None = None,
+        provider_id: str | None = None,
+        namespace_prefix: str = "",
+    ) -> Capability:
+        """Exactly one match of ``find_capability(...)``; ValueError naming the contract and the
         candidates otherwise (pin one with ``provider_id``)."""
+        filters: dict[str, Any] = dict(contract_id=contract_id, transport=transport, provider_kind=provider_kind,
+                                       provider_id=provider_id, namespace_prefix=namespace_prefix)
         caps = self.find_capability(**filters)
         if len(caps) == 1:
             return caps[0]
@@ -329,6 +371,10 @@ class AtlasClient:
         req = atlas_pb2.DisconnectCapabilityRequest(channel_id=channel_id)
         return self.stub.DisconnectCapability(req, timeout=self.timeout).was_open
 
+    def disconnect_capability(self, channel_id: str) -> bool:
+        """robonix-api's name for :meth:`disconnect`."""
+        return self.disconnect(channel_id)
+
     # ----------------------------------------------------------------- contracts & inspection
 
     def query_contract(self, contract_id: str) -> ContractDescriptor | None:
@@ -337,9 +383,9 @@ class AtlasClient:
         )
         return ContractDescriptor.from_pb(resp.contract) if resp.found else None
 
-    def list_contracts(self, prefix: str = "") -> list[ContractDescriptor]:
+    def list_contracts(self, namespace_prefix: str = "") -> list[ContractDescriptor]:
         resp = self.stub.ListContracts(
-            atlas_pb2.ListContractsRequest(namespace_prefix=prefix), timeout=self.timeout
+            atlas_pb2.ListContractsRequest(namespace_prefix=namespace_prefix), timeout=self.timeout
         )
         return [ContractDescriptor.from_pb(c) for c in resp.contracts]
 
@@ -347,7 +393,101 @@ class AtlasClient:
         return json.loads(self.stub.InspectAtlas(atlas_pb2.InspectAtlasRequest(), timeout=self.timeout).json)
 
 
-#: The default client. It reads ``$ROBONIX_ATLAS`` when it first connects, not at import.
-ATLAS: AtlasClient = AtlasClient()
+def split_transport_endpoint(a: Any, b: Any) -> tuple[Transport, str]:
+    """``(transport, endpoint)`` from two arguments given in either order (see ``declare_capability``)."""
+    a_is, b_is = _looks_like_transport(a), _looks_like_transport(b)
+    if a_is and not b_is:
+        return Transport.parse(a), str(b)
+    if b_is and not a_is:
+        return Transport.parse(b), str(a)
+    raise ValueError(f"transport/endpoint: cannot tell which of {a!r} and {b!r} is the transport "
+                     "(pass transport=... and endpoint=... by keyword)")
 
-__all__ = ["ATLAS", "AtlasClient", "HeartbeatHandle", "default_address"]
+
+def _looks_like_transport(value: Any) -> bool:
+    if isinstance(value, Transport) or (isinstance(value, int) and not isinstance(value, bool)):
+        return True
+    if isinstance(value, str):
+        try:
+            Transport.parse(value)
+        except ValueError:
+            return value.strip().lower() == "ros"
+        return value.strip() != ""
+    return False
+
+
+class RobonixAtlas(AtlasClient):
+    """The ``ATLAS`` singleton: an :class:`AtlasClient` whose calls fail the way robonix-api's do.
+
+    robonix-api's ``ATLAS`` logs and returns a neutral value where this SDK's client raises:
+    ``heartbeat`` -> None, ``unregister``/``disconnect_capability`` -> False, ``query*`` /
+    ``find_capability``/``list_contracts`` -> [], ``query_contract`` -> None, ``inspect`` -> {}.
+    Code that wants the errors (the SDK's own providers, rbnx) uses :class:`AtlasClient`.
+    Registration, ``declare_capability`` and ``connect_capability`` raise in both.
+    """
+
+    def __init__(self, endpoint: str | None = None) -> None:
+        super().__init__(endpoint)
+
+    def heartbeat(self, id: str) -> None:
+        try:
+            self.heartbeat_or_raise(id)
+        except grpc.RpcError as exc:
+            log.debug("heartbeat(%s): %s", id, exc)
+
+    def unregister(self, id: str) -> bool:
+        try:
+            return super().unregister(id)
+        except grpc.RpcError as exc:
+            log.debug("unregister(%s): %s", id, exc)
+            return False
+
+    def query(
+        self,
+        *,
+        kind: Kind | int | str | None = Kind.UNSPECIFIED,
+        id: str = "",
+        contract_id: str = "",
+        namespace_prefix: str = "",
+        transport: Transport | int | str | None = Transport.UNSPECIFIED,
+    ) -> list[CapabilityProvider]:
+        try:
+            return super().query(kind=kind, id=id, contract_id=contract_id, transport=transport,
+                                 namespace_prefix=namespace_prefix)
+        except grpc.RpcError as exc:
+            log.warning("Query(kind=%r, id=%r, contract=%r): %s", kind, id, contract_id, exc)
+            return []
+
+    def disconnect(self, channel_id: str) -> bool:
+        try:
+            return super().disconnect(channel_id)
+        except grpc.RpcError as exc:
+            log.debug("DisconnectCapability(%s): %s", channel_id, exc)
+            return False
+
+    def query_contract(self, contract_id: str) -> ContractDescriptor | None:
+        try:
+            return super().query_contract(contract_id)
+        except grpc.RpcError as exc:
+            log.debug("QueryContract(%s): %s", contract_id, exc)
+            return None
+
+    def list_contracts(self, namespace_prefix: str = "") -> list[ContractDescriptor]:
+        try:
+            return super().list_contracts(namespace_prefix)
+        except grpc.RpcError as exc:
+            log.warning("ListContracts(prefix=%r): %s", namespace_prefix, exc)
+            return []
+
+    def inspect(self) -> dict[str, Any]:
+        try:
+            return super().inspect()
+        except (grpc.RpcError, ValueError) as exc:
+            log.debug("InspectAtlas: %s", exc)
+            return {}
+
+
+#: The default client. It reads ``$ROBONIX_ATLAS`` when it first connects, not at import.
+ATLAS: RobonixAtlas = RobonixAtlas()
+
+__all__ = ["ATLAS", "AtlasClient", "HeartbeatHandle", "RobonixAtlas", "default_address", "split_transport_endpoint"]

@@ -23,6 +23,32 @@ OUT_DIR = Path(__file__).resolve().parent / "proto_gen"
 CONTRACTS_PROTO = "robonix_contracts.proto"
 
 
+def find_pkg_root(start: Path) -> Path | None:
+    """robonix-api's name: the nearest folder at or above ``start`` holding ``package_manifest.yaml``."""
+    from robonix_api.pkg import find_pkg_root as _find
+
+    return _find(Path(start))
+
+
+def ensure_proto_gen(start: Path | None = None) -> Path | None:
+    """robonix-api's name: put a package's own ``rbnx-build/codegen/proto_gen`` (and
+    ``robonix_mcp_types``) on ``sys.path`` when one exists at or above ``start``; returns that codegen
+    folder, else None. Without one, the bundled protos answer the same top-level names
+    (:mod:`robonix_api.proto_alias`)."""
+    from robonix_api import proto_alias
+
+    proto_alias.install()
+    d = (start or Path.cwd()).resolve()
+    for folder in (d, *d.parents):
+        codegen = folder / "rbnx-build" / "codegen"
+        if (codegen / "proto_gen" / "atlas_pb2.py").is_file():
+            for sub in (codegen / "proto_gen", codegen / "robonix_mcp_types"):
+                if sub.is_dir() and str(sub) not in sys.path:
+                    sys.path.insert(0, str(sub))
+            return codegen
+    return None
+
+
 def _rpc_line(spec: ContractSpec) -> str:
     req, resp = spec.proto_types()
     m = spec.method_name

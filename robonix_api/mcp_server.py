@@ -88,9 +88,7 @@ class McpToolServer:
     def __init__(self, name: str, tools: list[McpTool], host: str = "127.0.0.1") -> None:
         self._tools = {t.name: t for t in tools}
         self._host = host
-        self._server: uvicorn.Server | None = None
-        self._thread: threading.Thread | None = None
-        self._sock: socket.socket | None = None
+        self._asgi: AsgiServer | None = None
         self.port = 0
         self._mcp = Server(name, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
                            get_tool_input_schema=self._schema_of)
@@ -116,11 +114,34 @@ class McpToolServer:
     def start(self, timeout_s: float = 30.0) -> int:
         """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
         app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host)
+        self._asgi = AsgiServer(app, host=self._host)
+        self.port = self._asgi.start(timeout_s)
+        return self.port
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        if self._asgi is not None:
+            self._asgi.stop(timeout_s)
+            self._asgi = None
+
+
+class AsgiServer:
+    """An ASGI app (an MCP server's streamable-HTTP app) under uvicorn on a daemon thread, port 0."""
+
+    def __init__(self, app: Any, host: str = "127.0.0.1") -> None:
+        self._app = app
+        self._host = host
+        self._server: uvicorn.Server | None = None
+        self._thread: threading.Thread | None = None
+        self._sock: socket.socket | None = None
+        self.port = 0
+
+    def start(self, timeout_s: float = 30.0) -> int:
+        """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((self._host, 0))
         self.port = sock.getsockname()[1]
-        config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
+        config = uvicorn.Config(self._app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [sock]},
                                         name="mcp-server", daemon=True)

@@ -27,6 +27,7 @@ from robonix_api.driver import DriverServicer, Lifecycle, add_namespace_driver, 
 from robonix_api.grpc_contracts import add_servicer, build_servicer, generated_servicer
 from robonix_api.procs import ProcessGroups
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc
+from robonix_api.provider_compat import RobonixProviderMixin, check_namespace
 from robonix_api.topics import TopicsMixin
 from robonix_api.types import GrpcParams, Kind, LifecycleState, McpParams, Ros2Params, Transport
 
@@ -59,7 +60,7 @@ class _Declared:
     description: str
 
 
-class _Provider(TopicsMixin):
+class _Provider(TopicsMixin, RobonixProviderMixin):
     """Common body of the three provider kinds; they differ only in the Register RPC."""
 
     KIND: Kind = Kind.SERVICE
@@ -67,7 +68,7 @@ class _Provider(TopicsMixin):
     def __init__(self, id: str, namespace: str, *, pkg_root: str | os.PathLike[str] | None = None,  # noqa: A002
                  md_path: str | os.PathLike[str] | None = None, atlas: Any = None) -> None:
         self.id = pkg.resolve_id(id)
-        self.namespace = namespace
+        self.namespace = check_namespace(namespace)
         root = Path(pkg_root) if pkg_root is not None else pkg.find_pkg_root(pkg.caller_file())
         self.pkg_root: Path | None = root
         self.md_path, self.capability_md = pkg.capability_md(root, md_path)
@@ -92,12 +93,17 @@ class _Provider(TopicsMixin):
         self._hb_thread: threading.Thread | None = None
         self.grpc_endpoint = ""
         self.mcp_url = ""
+        self._grpc_descriptions: dict[str, str] = {}
         TopicsMixin.__init__(self)
+        self._init_compat()
 
     # ------------------------------------------------------------------ decorators
 
     def on_init(self, fn: F) -> F:
-        """``fn(cfg: dict)`` runs on CMD_INIT with the deploy's config block."""
+        """``fn(cfg: dict)`` runs on CMD_INIT with the deploy's config block (one handler: a second
+        ``@on_init`` is a ``RuntimeError``, as in robonix-api)."""
+        if self.lifecycle.handlers.get("init") is not None:
+            raise RuntimeError("on_init handler already registered")
         self.lifecycle.handlers["init"] = fn
         return fn
 
@@ -113,12 +119,14 @@ class _Provider(TopicsMixin):
         self.lifecycle.handlers["shutdown"] = fn
         return fn
 
-    def grpc(self, contract_id: str) -> Callable[[F], F]:
-        """Serve ``fn(req)`` or ``fn(req, ctx)`` as the contract's generated gRPC method."""
+    def grpc(self, contract_id: str, *, description: str = "") -> Callable[[F], F]:
+        """Serve ``fn(req)`` or ``fn(req, ctx)`` as the contract's generated gRPC method; declared with
+        ``description``, else the docstring, else the contract's description."""
         spec = builtin_contract(contract_id)
 
         def deco(fn: F) -> F:
-            self.attach_grpc_servicer(contract_id, build_servicer(spec, fn))
+            desc = description.strip() or (fn.__doc__ or "").strip()
+            self.attach_grpc_servicer(contract_id, build_servicer(spec, fn), description=desc)
             return fn
 
         return deco
@@ -135,20 +143,22 @@ class _Provider(TopicsMixin):
 
         return deco
 
-    def attach_grpc_servicer(self, contract_id: str, servicer: Any) -> None:
+    def attach_grpc_servicer(self, contract_id: str, servicer: Any, *, description: str = "") -> None:
         """Serve a ready-made servicer (a subclass of the generated ``<Service>Servicer``)."""
         spec = builtin_contract(contract_id)
         generated_servicer(spec)  # fail now, naming the contract, if there is no such service
         if self._grpc_server is not None:
             raise RuntimeError(f"attach_grpc_servicer({contract_id!r}) after run() started")
         self._grpc_handlers[contract_id] = servicer
+        self._grpc_descriptions[contract_id] = description
 
     # ------------------------------------------------------------------ properties
 
     @property
-    def state(self) -> str:
-        """Driver state: registered, inactive, active, error or terminated."""
-        return self.lifecycle.state
+    def state(self) -> LifecycleState:
+        """Driver state as robonix-api's ``LifecycleState`` (it also equals its lower-case name, e.g.
+        ``"active"``, which this SDK returned before)."""
+        return LifecycleState.parse(self.lifecycle.state)
 
     @property
     def config(self) -> dict[str, Any]:
@@ -188,26 +198,50 @@ class _Provider(TopicsMixin):
             self._declared[(contract_id, t)] = _Declared(contract_id, final, t, params, description)
             return final
 
-    def declare_ros2_topic(self, contract_id: str, topic: str, *, qos: str = "best_effort") -> str:
+    def declare_ros2_topic(self, contract_id: str, topic: str, *, qos: str = "best_effort",
+                           description: str = "") -> str:
         """Declare a DDS/ROS 2 topic; returns the topic the atlas settled on (it may rename on collision)."""
-        return self.declare_capability(contract_id, topic, Transport.ROS2, Ros2Params(qos_profile=qos))
+        return self.declare_capability(contract_id, topic, Transport.ROS2, Ros2Params(qos_profile=qos), description)
 
-    def declare_grpc(self, contract_id: str, endpoint: str = "", *, description: str = "") -> str:
-        """Declare a gRPC contract at ``endpoint`` (default: this provider's own gRPC server)."""
-        spec = builtin_contract(contract_id)
-        params = GrpcParams(proto_file="robonix_contracts.proto", service_name=spec.service_name,
-                            method=spec.method_name)
-        return self.declare_capability(contract_id, endpoint or self.grpc_endpoint, Transport.GRPC, params,
-                                       description or spec.description)
+    def declare_grpc(self, contract_id: str, endpoint: str = "", service_name: str = "", method: str = "",
+                     proto_file: str = "robonix_contracts.proto", description: str = "") -> str:
+        """Declare a gRPC contract at ``endpoint`` (default: this provider's own gRPC server). Service and
+        method default to the catalogue's names for the contract (robonix-api requires them)."""
+        spec = builtin_contract(contract_id) if not (service_name and method) else None
+        params = GrpcParams(proto_file=proto_file, service_name=service_name or spec.service_name,  # type: ignore[union-attr]
+                            method=method or spec.method_name)  # type: ignore[union-attr]
+        desc = description or self._grpc_descriptions.get(contract_id, "") or (spec.description if spec else "")
+        return self.declare_capability(contract_id, endpoint or self.grpc_endpoint, Transport.GRPC, params, desc)
 
-    def declare_mcp(self, contract_id: str, endpoint: str = "", *, input_schema_json: str = "",
+    def declare_mcp(self, contract_id: str, endpoint: str = "", input_schema_json: str = "{}",
                     description: str = "") -> str:
         return self.declare_capability(contract_id, endpoint or self.mcp_url, Transport.MCP,
-                                       McpParams(input_schema_json=input_schema_json), description)
+                                       McpParams(input_schema_json=input_schema_json or "{}"), description)
 
-    def spawn(self, cmd: str | Sequence[str], **popen_kwargs: Any) -> subprocess.Popen[Any]:
-        """Start a helper process in its own group; teardown sends TERM, waits 5 s, then KILL."""
-        return self._procs.spawn(cmd, **popen_kwargs)
+    def spawn(self, argv: str | Sequence[str], *, env: dict[str, Any] | None = None,
+              log: str | os.PathLike[str] | None = None, cwd: str | os.PathLike[str] | None = None,
+              **popen_kwargs: Any) -> subprocess.Popen[Any]:
+        """Start a helper process in its own group; teardown sends TERM, waits 5 s, then KILL.
+
+        As in robonix-api, ``env`` is added to this process's environment, and ``log`` sends stdout and
+        stderr to a file (a bare name goes under ``<pkg_root>/rbnx-build/data/``; a path as given).
+        Other keywords go to ``subprocess.Popen``.
+        """
+        from robonix_api.spawn import open_log
+
+        if env is not None:
+            popen_kwargs["env"] = {**os.environ, **{k: str(v) for k, v in env.items()}}
+        if cwd is not None:
+            popen_kwargs["cwd"] = str(cwd)
+        fh = open_log(log, self.pkg_root)
+        if fh is not None:
+            popen_kwargs.setdefault("stdout", fh)
+            popen_kwargs.setdefault("stderr", fh)
+        try:
+            return self._procs.spawn(argv, **popen_kwargs)
+        finally:
+            if fh is not None:
+                fh.close()  # the child holds its own descriptor
 
     # ------------------------------------------------------------------ atlas plumbing
 
@@ -306,6 +340,8 @@ class _Provider(TopicsMixin):
 
     def start(self) -> None:
         """Register, serve, declare and heartbeat; returns once the provider is reachable."""
+        if self._grpc_server is not None:
+            raise RuntimeError(f"provider {self.id} already started")
         self.lifecycle.set_push(self._push_state)
         self._register(wait_s=REGISTER_WAIT_S)
         bind = netutil.bind_host()
@@ -330,6 +366,11 @@ class _Provider(TopicsMixin):
             self.declare_grpc(cid)
         if self._mcp_handlers:
             self._start_mcp(bind, host)
+        elif self._mcp_app is not None:
+            from robonix_api.tool import declare_app_tools
+
+            self.mcp_url = f"http://{netutil.host_port(host, self._start_mcp_app(bind))}/mcp/"
+            declare_app_tools(self, self._mcp_app)
         self._declare_all(only=set(self._pending))  # declared before run(), queued while unregistered
         period = heartbeat_period()
         self._hb_thread = threading.Thread(target=self._heartbeat_loop, args=(period,),
@@ -440,8 +481,11 @@ class _Provider(TopicsMixin):
             if self._hb_thread is not None:
                 self._hb_thread.join(5.0)
             self._procs.kill_all(grace_s=5.0)
+            self._close_channels()
             if self._mcp_server is not None:
                 self._mcp_server.stop()
+            if self._mcp_app_server is not None:
+                self._mcp_app_server.stop()
             self.close_topics()
             if self._grpc_server is not None:
                 self._grpc_server.stop(grace=1.0).wait(5.0)  # lets the CMD_SHUTDOWN reply out

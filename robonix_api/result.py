@@ -19,9 +19,20 @@ class Ok:
 
 @dataclass(frozen=True)
 class Err:
-    """The command failed; the provider goes to ERROR and ``msg`` is reported as the Driver error."""
+    """The command failed; the provider goes to ERROR and ``message`` is reported as the Driver error.
 
-    msg: str = ""
+    ``message`` is robonix-api's field name; ``msg`` (this SDK's earlier name) stays as an alias, both as
+    a read-only attribute and as a constructor keyword (``Err(msg="...")``).
+    """
+
+    message: str = ""
+
+    def __init__(self, message: str = "", *, msg: str | None = None) -> None:
+        object.__setattr__(self, "message", message if msg is None else msg)
+
+    @property
+    def msg(self) -> str:
+        return self.message
 
     def __bool__(self) -> bool:
         return False

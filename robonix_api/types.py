@@ -57,6 +57,19 @@ class _WireEnum(IntEnum):
         """Lower-case short name, e.g. ``ros2``, ``primitive``, ``active``."""
         return self.name.lower()
 
+    def __eq__(self, other: object) -> bool:
+        """Also equal to its lower-case label, so ``provider.state == "active"`` (this SDK's earlier
+        string states) keeps working now that ``state`` is a :class:`LifecycleState` as in robonix-api."""
+        if isinstance(other, str):
+            return other.strip().lower() == self.name.lower()
+        return int.__eq__(self, other)
+
+    def __ne__(self, other: object) -> bool:
+        eq = self.__eq__(other)
+        return eq if eq is NotImplemented else not eq
+
+    __hash__ = IntEnum.__hash__
+
 
 class Kind(_WireEnum):
     UNSPECIFIED = 0
@@ -106,7 +119,7 @@ def _enum_or_raw(enum: type[_WireEnum], value: int) -> Any:
 
 @dataclass(frozen=True)
 class GrpcParams:
-    proto_file: str = ""
+    proto_file: str = "robonix_contracts.proto"
     service_name: str = ""
     method: str = ""
 
@@ -122,7 +135,7 @@ class Ros2Params:
 
 @dataclass(frozen=True)
 class McpParams:
-    input_schema_json: str = ""
+    input_schema_json: str = "{}"
 
     transport = Transport.MCP
 
@@ -168,7 +181,8 @@ def params_to_dict(params: TransportParams | None) -> dict[str, Any] | None:
 
 
 def default_params(transport: Transport) -> TransportParams | None:
-    """Empty params of the right branch, so a caller may omit them (the robonix SDK does)."""
+    """Default params of the right branch, so a caller may omit them (robonix-api sends the same:
+    ``proto_file="robonix_contracts.proto"`` for gRPC, ``"{}"`` as MCP input schema)."""
     return {Transport.GRPC: GrpcParams(), Transport.ROS2: Ros2Params(), Transport.MCP: McpParams()}.get(
         transport
     )
@@ -189,6 +203,13 @@ class Capability:
     params: TransportParams | None = None
     description: str = ""
     namespace_mismatch: bool = False
+
+    def __post_init__(self) -> None:
+        # robonix-api's positional order is (..., transport, description, params): tell it apart by type.
+        if isinstance(self.params, str):
+            desc, params = self.params, self.description
+            self.params = None if isinstance(params, str) else params
+            self.description = desc
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.Capability) -> Capability:
@@ -266,12 +287,25 @@ class Channel:
 
     channel_id: str
     endpoint: str
-    params: TransportParams | None
+    params: TransportParams | None = None
     provider_id: str = ""
     contract_id: str = ""
     transport: Transport = Transport.UNSPECIFIED
     _client: AtlasClient | None = field(default=None, repr=False, compare=False)
     _closed: bool = field(default=False, repr=False, compare=False)
+    _closer: Any = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # robonix-api's positional order is (provider_id, contract_id, transport, endpoint, channel_id,
+        # params): its third argument is a Transport where ours is params, so the two can be told apart.
+        if isinstance(self.params, int):
+            pid, cid, transport, endpoint, chid, params = (self.channel_id, self.endpoint, self.params,
+                                                           self.provider_id, self.contract_id, self.transport)
+            self.provider_id, self.contract_id, self.endpoint, self.channel_id = pid, cid, endpoint, chid
+            self.transport = Transport.parse(transport)
+            self.params = None if isinstance(params, int) else params
+        if not isinstance(self.transport, Transport):
+            self.transport = Transport.parse(self.transport)
 
     @property
     def qos_profile(self) -> str:
@@ -279,11 +313,22 @@ class Channel:
         return self.params.qos_profile if isinstance(self.params, Ros2Params) else ""
 
     def close(self) -> bool:
-        """Disconnect once; later calls are no-ops. Returns whether the atlas still had it open."""
-        if self._closed or self._client is None:
+        """Disconnect once; later calls are no-ops. Returns whether the atlas still had it open.
+
+        A channel built by hand may carry robonix-api's ``_closer(channel_id)`` instead of a client;
+        as in robonix-api, a failing closer is ignored (closing is best effort)."""
+        if self._closed:
+            return False
+        if self._client is not None:
+            self._closed = True
+            return self._client.disconnect(self.channel_id)
+        if self._closer is None:
             return False
         self._closed = True
-        return self._client.disconnect(self.channel_id)
+        try:
+            return bool(self._closer(self.channel_id))
+        except Exception:  # best effort, as robonix-api
+            return False
 
     def __enter__(self) -> Channel:
         return self
@@ -301,7 +346,7 @@ class FieldSpec:
 
     name: str
     type_name: str
-    is_primitive: bool
+    is_primitive: bool = False
     is_array: bool = False
     array_size: int = 0
 
@@ -322,7 +367,7 @@ class FieldSpec:
 @dataclass(frozen=True)
 class ContractDescriptor:
     id: str
-    version: str = "1"
+    version: str = ""
     kind: Kind = Kind.UNSPECIFIED
     mode: str = ""
     io_msg_type: str = ""
@@ -333,6 +378,16 @@ class ContractDescriptor:
     srv_response_fields: tuple[FieldSpec, ...] = ()
     description: str = ""
     cross_namespace: bool = False
+
+    def __post_init__(self) -> None:
+        # robonix-api's positional order puts ``description`` right after ``source_toml_path``.
+        if isinstance(self.msg_fields, str):
+            desc, msg, req, resp = (self.msg_fields, self.srv_request_fields, self.srv_response_fields,
+                                    self.description)
+            object.__setattr__(self, "description", desc)
+            object.__setattr__(self, "msg_fields", tuple(msg))
+            object.__setattr__(self, "srv_request_fields", tuple(req))
+            object.__setattr__(self, "srv_response_fields", tuple(resp) if not isinstance(resp, str) else ())
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.ContractDescriptor) -> ContractDescriptor:

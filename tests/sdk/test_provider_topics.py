@@ -27,7 +27,7 @@ def test_publisher_declared_and_emitted(fake_atlas: FakeAtlas, clean_env: None, 
         seen = threading.Event()
         svc.create_subscription(ODOM, topic=topic, msg_type=dds.Twist, qos="reliable",
                                 callback=lambda m: (got.append(m), seen.set()))
-        assert svc.wait_for_topic(topic, dds.Twist, timeout_s=30)
+        assert svc.wait_for_writer(topic, dds.Twist, timeout_s=30)
         msg = dds.Twist(linear=dds.Vector3(x=0.25, y=0.0, z=0.0), angular=dds.Vector3(x=0.0, y=0.0, z=0.5))
 
         def delivered() -> bool:
