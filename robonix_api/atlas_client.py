@@ -261,11 +261,11 @@ class AtlasClient:
     def query(
         self,
         *,
-        kind: Kind | int | str | None = None,
+        kind: Kind | int | str | None = Kind.UNSPECIFIED,
         id: str = "",
         contract_id: str = "",
-        transport: Transport | int | str | None = None,
         namespace_prefix: str = "",
+        transport: Transport | int | str | None = Transport.UNSPECIFIED,
     ) -> list[CapabilityProvider]:
         """Raw Query (server-side filters only; TERMINATED providers included)."""
         req = atlas_pb2.QueryRequest(
@@ -279,17 +279,17 @@ class AtlasClient:
         return [CapabilityProvider.from_pb(p) for p in resp.providers]
 
     def query_primitives(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
-                         transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+                         transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
         return self.query(kind=Kind.PRIMITIVE, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
     def query_services(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
-                       transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+                       transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
         return self.query(kind=Kind.SERVICE, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
     def query_skills(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
-                     transport: Transport | int | str | None = None) -> list[CapabilityProvider]:
+                     transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
         return self.query(kind=Kind.SKILL, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
@@ -297,9 +297,9 @@ class AtlasClient:
         self,
         *,
         contract_id: str = "",
-        transport: Transport | int | str | None = None,
-        provider_kind: Kind | int | str | None = None,
-        provider_id: str | None = None,
+        transport: Transport | int | str | None = Transport.UNSPECIFIED,
+        provider_kind: Kind | int | str | None = Kind.UNSPECIFIED,
+        provider_id: str | None = "",
         namespace_prefix: str = "",
     ) -> list[Capability]:
         """Live capabilities matching the filters: Query, then exact contract (when given) and transport,
@@ -324,9 +324,9 @@ class AtlasClient:
         self,
         *,
         contract_id: str,
-        transport: Transport | int | str | None = None,
-        provider_kind: Kind | int | str | None = None,
-        provider_id: str | None = None,
+        transport: Transport | int | str | None = Transport.UNSPECIFIED,
+        provider_kind: Kind | int | str | None = Kind.UNSPECIFIED,
+        provider_id: str | None = "",
         namespace_prefix: str = "",
     ) -> Capability:
         """Exactly one match of ``find_capability(...)``; ValueError naming the contract and the
@@ -338,7 +338,7 @@ class AtlasClient:
             return caps[0]
         cid = filters.get("contract_id", "")
         extra = ", ".join(
-            f"{k}={v!r}" for k, v in filters.items() if k != "contract_id" and v not in (None, "")
+            f"{k}={v!r}" for k, v in filters.items() if k != "contract_id" and v
         )
         where = f" ({extra})" if extra else ""
         if not caps:

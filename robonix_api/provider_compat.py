@@ -108,8 +108,7 @@ class RobonixProviderMixin:
 
     # ------------------------------------------------------------------ helpers
 
-    @staticmethod
-    def resolve_host_ip(target_ip: str) -> str | None:
+    def resolve_host_ip(self, target_ip: str) -> str | None:
         """The local IPv4 address the kernel would use to reach ``target_ip`` (None if no route)."""
         try:
             with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:

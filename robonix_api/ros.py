@@ -3,13 +3,15 @@
 robonix-api passes message types around by ROS name (``"LaserScan"``, ``"sensor_msgs/msg/LaserScan"``)
 and resolves them to rclpy classes. Here the same names resolve to this SDK's Cyclone DDS classes
 (``robonix_api.dds.messages``), which carry ROS 2's DDS type names, so a ROS 2 node on the same domain
-still sees ``sensor_msgs/msg/LaserScan``. robonix-api's ``RosBackend`` (an rclpy node) has no
-counterpart: a provider's data plane is :meth:`Primitive.dds_node`.
+still sees ``sensor_msgs/msg/LaserScan``. ``RosBackend`` keeps robonix-api's process-wide singleton
+shape, backed by one :class:`~robonix_api.dds.DdsNode` instead of an rclpy node.
 """
 
 from __future__ import annotations
 
 import functools
+import threading
+from collections.abc import Callable
 from typing import Any
 
 from robonix_api.dds.qos import QOS_NAMES
@@ -83,4 +85,63 @@ def declared_qos(qos: str | int | Any) -> str:
     return qos if isinstance(qos, str) else "reliable"
 
 
-__all__ = ["BARE_NAME_PACKAGES", "declared_qos", "qos_and_depth", "resolve_msg_type"]
+class RosBackend:
+    """One data-plane node per process (robonix-api's ``RosBackend`` over rclpy; here a ``DdsNode``).
+
+    Providers use their own node (``provider.dds_node()``); this is for code written against
+    robonix-api's ``RosBackend.get().create_publisher(...)``. ``msg_type`` may be a class or a ROS name.
+    """
+
+    _instance: RosBackend | None = None
+    _instance_lock = threading.Lock()
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._node: Any = None
+
+    @classmethod
+    def get(cls) -> RosBackend:
+        with cls._instance_lock:
+            if cls._instance is None:
+                cls._instance = RosBackend()
+            return cls._instance
+
+    @property
+    def node(self) -> Any:
+        """The process's ``DdsNode`` (created on first use)."""
+        with self._lock:
+            if self._node is None:
+                from robonix_api.dds import DdsNode
+
+                self._node = DdsNode(name="robonix_capability")
+            return self._node
+
+    def create_publisher(self, msg_type: type | str, topic: str, qos: Any = 10) -> Any:
+        preset, depth = qos_and_depth(qos)
+        return self.node.create_publisher(topic, resolve_msg_type(msg_type), preset, depth)
+
+    def create_subscription(self, msg_type: type | str, topic: str, callback: Callable[[Any], None],
+                            qos: Any = 10) -> Any:
+        preset, depth = qos_and_depth(qos)
+        return self.node.create_subscription(topic, resolve_msg_type(msg_type), callback, preset, depth)
+
+    def wait_for_topic(self, topic: str, msg_type: type | str, timeout_s: float) -> bool:
+        """True once a first message arrives (best-effort reader), as robonix-api."""
+        return self.node.wait_for_message(topic, resolve_msg_type(msg_type), timeout_s, "best_effort") is not None
+
+    @staticmethod
+    def qos(spec: Any) -> Any:
+        """A QoS spec (name, depth or cyclonedds ``Qos``) as a cyclonedds ``Qos``."""
+        from robonix_api.dds.qos import resolve_qos
+
+        preset, depth = qos_and_depth(spec)
+        return resolve_qos(preset, depth)
+
+    def shutdown(self) -> None:
+        with self._lock:
+            node, self._node = self._node, None
+        if node is not None:
+            node.close()
+
+
+__all__ = ["BARE_NAME_PACKAGES", "RosBackend", "declared_qos", "qos_and_depth", "resolve_msg_type"]

@@ -243,7 +243,7 @@ class CapabilityProvider:
     namespace: str
     capability_md_path: str = ""
     last_heartbeat_ms: int = 0
-    state: LifecycleState = LifecycleState.REGISTERED
+    state: LifecycleState = LifecycleState.UNSPECIFIED
     state_detail: str = ""
     capabilities: list[Capability] = field(default_factory=list)
     capability_md: str = ""

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import grpc
 import pytest
-from conftest import wait_until
+from support.procs import wait_until
 from support.wire import decode, f_str, f_varint, one
 
 from robonix_api import Deferred, Err, Ok, Service

@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from conftest import wait_until
+from support.procs import wait_until
 
 from atlas.server import AtlasServer
 from robonix_api.atlas_client import AtlasClient

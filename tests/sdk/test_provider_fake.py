@@ -7,7 +7,8 @@ from pathlib import Path
 
 import grpc
 import pytest
-from conftest import FakeAtlas, wait_until
+from support.fakes import FakeAtlas
+from support.procs import wait_until
 
 from robonix_api import Deferred, Ok, Primitive, Service, Skill, StatusError
 from robonix_api.driver import CMD_ACTIVATE, CMD_INIT

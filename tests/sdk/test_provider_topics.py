@@ -6,7 +6,8 @@ import os
 import threading
 
 import pytest
-from conftest import FakeAtlas, wait_until
+from support.fakes import FakeAtlas
+from support.procs import wait_until
 
 from robonix_api import Service
 from robonix_api.types import Ros2Params, Transport
