@@ -306,6 +306,8 @@ class Channel:
             self.params = None if isinstance(params, int) else params
         if not isinstance(self.transport, Transport):
             self.transport = Transport.parse(self.transport)
+        if self._client is not None and not hasattr(self._client, "disconnect"):  # robonix-api's 7th: _closer
+            self._closer, self._client = self._client, None
 
     @property
     def qos_profile(self) -> str:
