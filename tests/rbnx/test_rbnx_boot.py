@@ -89,7 +89,8 @@ def test_boot_defers_retries_caps_and_sigint_leaves_nothing(tmp_path: Path, mini
         assert set(provs) == {"odom_consumer", "odom_primitive"}
         assert all(p["state"] == "STATE_ACTIVE" for p in provs.values())
         contracts = {p: {c["contract_id"] for c in provs[p]["capabilities"]} for p in provs}
-        assert contracts["odom_primitive"] == {"robonix/lifecycle/driver", "robonix/primitive/chassis/odom"}
+        assert contracts["odom_primitive"] == {"robonix/lifecycle/driver", "robonix/primitive/chassis/driver",
+                                               "robonix/primitive/chassis/odom"}
         assert "robonix/lifecycle/driver" in contracts["odom_consumer"]
 
         text = run(["--atlas", atlas, "caps", "-v"], env, tmp_path)
