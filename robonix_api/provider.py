@@ -88,6 +88,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._done = threading.Event()
         self._run_error: BaseException | None = None
         self._thread: threading.Thread | None = None
+        self._in_run = False  # run() owns teardown; after a bare start()/bootstrap(), stop() does it
         self._grpc_server: grpc.Server | None = None
         self._mcp_server: Any = None
         self._hb_thread: threading.Thread | None = None
@@ -414,6 +415,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
     def run(self) -> None:
         """Serve until CMD_SHUTDOWN or SIGTERM/SIGINT (main thread), then tear down and return."""
         restore = self._install_signals()
+        self._in_run = True
         try:
             try:
                 self.start()
@@ -453,6 +455,10 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._stop.set()
         if self._thread is None and not self._ready.is_set():
             return  # never started: nothing to tear down
+        if not self._in_run:  # started by start()/bootstrap(): nobody else will tear down
+            if not self._done.is_set():
+                self._teardown()
+            return
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout_s)
         self._done.wait(timeout_s)

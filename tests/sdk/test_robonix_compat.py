@@ -224,6 +224,8 @@ def test_provider_robonix_surface(tmp_path: Path, fake_atlas: FakeAtlas, clean_e
         assert declared[("c1", "robonix/service/map/list_maps", Transport.GRPC)]["params"] == GrpcParams(
             "robonix_contracts.proto", "Svc", "M")
         assert svc.resolve_host_ip("127.0.0.1") == "127.0.0.1"
+        svc.stop()  # after bootstrap() (no run loop), stop() tears down itself
+        assert svc.wait(0) and fake_atlas.states[-1][1] == LifecycleState.TERMINATED
     finally:
         svc.stop()
 
