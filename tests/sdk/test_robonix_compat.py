@@ -269,6 +269,18 @@ def test_connect_capability_and_subscription_from_channel(atlas_server, clean_en
 
         wait_until(delivered, 60, "a LaserScan through the channel's topic")
         assert list(got[0].ranges) == [1.25] * 4  # type: ignore[attr-defined]
+        assert watcher.wait_for_topic("/c_scan2", "LaserScan", timeout_s=0.3) is False  # no message: False
+        quiet = threading.Event()
+
+        def keep_publishing() -> None:
+            while not quiet.wait(0.05):
+                lidar.emit(LIDAR, scan)
+
+        threading.Thread(target=keep_publishing, daemon=True).start()
+        try:
+            assert watcher.wait_for_topic("/c_scan2", "sensor_msgs/msg/LaserScan", timeout_s=60) is True
+        finally:
+            quiet.set()
         assert any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])
         watcher.stop()
         assert not any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])  # closed on teardown
