@@ -53,6 +53,24 @@ __all__ = [
 proto_alias.install()
 
 
+def _bootstrap_caller_codegen() -> None:
+    """As robonix-api does on import: put the importing package's ``rbnx-build/codegen`` outputs on
+    ``sys.path`` so its generated modules import at the top of the file (a no-op without them)."""
+    from robonix_api import pkg
+    from robonix_api.codegen import ensure_proto_gen
+
+    root = pkg.find_pkg_root(pkg.caller_file())
+    if root is not None:
+        ensure_proto_gen(root)
+
+
+try:
+    _bootstrap_caller_codegen()
+except OSError:  # an unreadable folder on the way up must not break importing the SDK
+    pass
+del _bootstrap_caller_codegen
+
+
 def __getattr__(name: str) -> Any:
     if name == "ATLAS":
         from robonix_api.atlas_client import ATLAS

@@ -27,6 +27,7 @@ from mcp.shared.exceptions import MCPError
 from robonix_api.contracts import ContractSpec
 from robonix_api.grpc_contracts import StatusError, invoke
 from robonix_api.proto_schema import message_class, message_schema
+from robonix_api.tool import build_input, codegen_input_class, input_schema, wire_output_for_json
 
 log = logging.getLogger(__name__)
 
@@ -35,12 +36,13 @@ MCP_PATH = "/mcp/"
 
 @dataclass
 class McpTool:
-    """One contract exposed as an MCP tool."""
+    """One contract exposed as an MCP tool. The request type is the contract's request proto, or the
+    handler's annotated input class when that is a robonix codegen class (``json_schema``/``from_dict``)."""
 
     spec: ContractSpec
     handler: Callable[..., Any]
     description: str
-    request_cls: type[Message]
+    request_cls: type
     input_schema: dict[str, Any]
 
     @property
@@ -49,16 +51,22 @@ class McpTool:
 
     @classmethod
     def build(cls, spec: ContractSpec, handler: Callable[..., Any], description: str = "") -> McpTool:
+        doc = (description or (handler.__doc__ or "")).strip() or spec.description or spec.id
+        codegen_cls = codegen_input_class(handler)
+        if codegen_cls is not None:
+            return cls(spec, handler, doc, codegen_cls, input_schema(codegen_cls))
+        if not spec.idl:
+            raise TypeError(f"@mcp({spec.id!r}): the contract is not in the catalogue, so the handler's input "
+                            "must be annotated with a codegen class (json_schema()/from_dict())")
         req_name, _ = spec.proto_types()
         req_cls = message_class(req_name)
-        doc = (description or (handler.__doc__ or "")).strip() or spec.description or spec.id
         return cls(spec, handler, doc, req_cls, message_schema(req_cls.DESCRIPTOR))
 
     def call(self, arguments: dict[str, Any]) -> types.CallToolResult:
-        """Parse the arguments into the request proto, run the handler, return structured output."""
+        """Parse the arguments into the request type, run the handler, return structured output."""
         try:
-            request = json_format.ParseDict(arguments, self.request_cls())
-        except json_format.ParseError as exc:
+            request = build_input(self.request_cls, arguments)
+        except (json_format.ParseError, TypeError, ValueError, KeyError) as exc:
             return _tool_error(f"invalid arguments for tool {self.name}: {exc}")
         try:
             response = invoke(self.handler, request, None)
@@ -67,13 +75,12 @@ class McpTool:
         except Exception as exc:  # report to the caller, keep serving
             log.exception("MCP tool %s raised", self.name)
             return _tool_error(f"{self.name}: {type(exc).__name__}: {exc}")
-        if isinstance(response, Message):
-            data = json_format.MessageToDict(response, preserving_proto_field_name=True,
-                                             always_print_fields_with_no_presence=True)
-        elif isinstance(response, dict):
-            data = response
-        else:
-            return _tool_error(f"{self.name}: handler returned {type(response).__name__}, expected a proto message")
+        data = wire_output_for_json(response)
+        if not isinstance(data, dict):
+            if isinstance(data, Message) or not isinstance(data, (str, int, float, bool, list, type(None))):
+                return _tool_error(f"{self.name}: handler returned {type(response).__name__}, expected a proto "
+                                   "message or JSON data")
+            data = {"result": data}
         return types.CallToolResult(content=[types.TextContent(type="text", text=json.dumps(data))],
                                     structured_content=data)
 

@@ -22,7 +22,7 @@ from typing import Any, TypeVar
 import grpc
 
 from robonix_api import netutil, pkg
-from robonix_api.contracts import builtin_contract
+from robonix_api.contracts import ContractSpec, builtin_contract
 from robonix_api.driver import DriverServicer, Lifecycle, add_namespace_driver, namespace_driver_contract
 from robonix_api.grpc_contracts import add_servicer, build_servicer, generated_servicer
 from robonix_api.procs import ProcessGroups
@@ -71,6 +71,10 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self.namespace = check_namespace(namespace)
         root = Path(pkg_root) if pkg_root is not None else pkg.find_pkg_root(pkg.caller_file())
         self.pkg_root: Path | None = root
+        if root is not None:  # the package's own robonix codegen output, importable as robonix-api makes it
+            from robonix_api.codegen import ensure_proto_gen
+
+            ensure_proto_gen(root)
         self.md_path, self.capability_md = pkg.capability_md(root, md_path)
         self._atlas_arg = atlas
         self._atlas: Any = None
@@ -133,12 +137,20 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         return deco
 
     def mcp(self, contract_id: str, *, description: str = "") -> Callable[[F], F]:
-        """Expose ``fn(req) -> response`` as an MCP tool named after the contract's last segment."""
-        spec = builtin_contract(contract_id)
+        """Expose ``fn(req) -> response`` as an MCP tool named after the contract's last segment.
+
+        ``req`` is the contract's request proto; a contract outside the catalogue (a robonix package's
+        own) is served when ``fn`` annotates its input with a robonix codegen class instead."""
+        from robonix_api.tool import codegen_input_class
+
+        spec = mcp_contract_spec(contract_id)
         if spec.mode != "rpc":
             raise ValueError(f"@mcp({contract_id!r}): only rpc contracts can be tools (mode {spec.mode})")
 
         def deco(fn: F) -> F:
+            if not spec.idl and codegen_input_class(fn) is None:
+                raise KeyError(f"unknown contract {contract_id!r}: not in the catalogue, and {fn.__name__}'s "
+                               "input is not a codegen class (json_schema()/from_dict())")
             self._mcp_handlers[contract_id] = (fn, description)
             return fn
 
@@ -404,7 +416,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
 
         from robonix_api.mcp_server import MCP_PATH, McpTool, McpToolServer
 
-        tools = [McpTool.build(builtin_contract(cid), fn, desc) for cid, (fn, desc) in self._mcp_handlers.items()]
+        tools = [McpTool.build(mcp_contract_spec(cid), fn, desc) for cid, (fn, desc) in self._mcp_handlers.items()]
         self._mcp_server = McpToolServer(self.id, tools, host=bind)
         port = self._mcp_server.start()
         self.mcp_url = f"http://{netutil.host_port(host, port)}{MCP_PATH}"
@@ -499,6 +511,14 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                 self._atlas.close()
         finally:
             self._done.set()
+
+
+def mcp_contract_spec(contract_id: str) -> ContractSpec:
+    """The catalogue's contract, or an rpc contract with no IDL for one a package brings itself."""
+    try:
+        return builtin_contract(contract_id)
+    except KeyError:
+        return ContractSpec(id=contract_id, version="1", kind="service", mode="rpc", idl="")
 
 
 def _status_code(exc: BaseException) -> grpc.StatusCode | None:

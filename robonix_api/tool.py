@@ -80,6 +80,21 @@ def input_schema(input_cls: type) -> dict[str, Any]:
     return dict(schema())
 
 
+def codegen_input_class(handler: Callable[..., Any]) -> type | None:
+    """The handler's annotated input class when it is a robonix codegen class (not a proto), else None."""
+    try:
+        params = [p for p in inspect.signature(handler).parameters.values()
+                  if p.kind in (p.POSITIONAL_OR_KEYWORD, p.POSITIONAL_ONLY)]
+        hints = get_type_hints(handler) if params else {}
+    except (TypeError, ValueError, NameError):
+        return None
+    cls = hints.get(params[0].name) if params else None
+    if (isinstance(cls, type) and not issubclass(cls, Message) and callable(getattr(cls, "json_schema", None))
+            and callable(getattr(cls, "from_dict", None))):
+        return cls
+    return None
+
+
 def build_input(input_cls: type, arguments: dict[str, Any]) -> Any:
     if issubclass(input_cls, Message):
         return json_format.ParseDict(arguments, input_cls())
@@ -138,5 +153,5 @@ def declare_app_tools(provider: Any, app: Any) -> None:
         provider.declare_mcp(contract_id, input_schema_json=json.dumps(schema), description=description)
 
 
-__all__ = ["declare_app_tools", "io_types_from_handler", "json_prop_to_py_type", "make_shim", "mcp_contract",
+__all__ = ["build_input", "codegen_input_class", "declare_app_tools", "input_schema", "io_types_from_handler", "json_prop_to_py_type", "make_shim", "mcp_contract",
            "wire_output_for_json"]

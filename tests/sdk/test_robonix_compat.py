@@ -375,3 +375,72 @@ def test_generated_protos_importable_by_top_level_name(tmp_path: Path) -> None:
         assert ensure_proto_gen(tmp_path / "src") == gen.parent and str(gen) in sys.path
     finally:
         sys.path.remove(str(gen))
+
+
+ECHO_TYPES = '''
+from dataclasses import asdict, dataclass
+
+
+@dataclass
+class Echo_Request:
+    text: str = ""
+    times: int = 1
+
+    @classmethod
+    def json_schema(cls):
+        return {"type": "object", "properties": {"text": {"type": "string"}, "times": {"type": "integer"}}}
+
+    @classmethod
+    def from_dict(cls, d):
+        return cls(**d)
+
+
+@dataclass
+class Echo_Response:
+    text: str = ""
+
+    def to_dict(self):
+        return asdict(self)
+
+
+def echo(req: Echo_Request) -> Echo_Response:
+    """Repeat the text."""
+    return Echo_Response(text=req.text * req.times)
+'''
+
+
+def test_mcp_tool_of_a_package_contract_with_codegen_types(tmp_path: Path, fake_atlas: FakeAtlas,
+                                                           clean_env: None) -> None:
+    """A robonix package's own MCP contract (not in our catalogue) with its codegen input/output classes,
+    found in the package's rbnx-build/codegen as robonix-api finds them."""
+    from mcp import Client
+
+    (tmp_path / "package_manifest.yaml").write_text("manifestVersion: 1\n")
+    codegen = tmp_path / "rbnx-build" / "codegen"
+    (codegen / "proto_gen").mkdir(parents=True)
+    (codegen / "proto_gen" / "atlas_pb2.py").write_text("")
+    (codegen / "robonix_mcp_types").mkdir()
+    (codegen / "robonix_mcp_types" / "c4_echo_types.py").write_text(ECHO_TYPES)
+    svc = Service("c4", "robonix/service/demo", atlas=fake_atlas, pkg_root=tmp_path)
+    try:
+        echo_types = importlib.import_module("c4_echo_types")  # on sys.path now, as with robonix-api
+        svc.provides_mcp("robonix/service/demo/echo")(echo_types.echo)
+        with pytest.raises(KeyError, match="not in the catalogue"):
+            svc.provides_mcp("robonix/service/demo/other")(lambda req: None)
+        svc.run_in_thread()
+        decl = fake_atlas.declared[("c4", "robonix/service/demo/echo", Transport.MCP)]
+        assert json.loads(decl["params"].input_schema_json)["properties"]["times"] == {"type": "integer"}
+
+        async def talk() -> dict:  # type: ignore[type-arg]
+            async with Client(svc.mcp_endpoint) as client:
+                res = await client.call_tool("echo", {"text": "ab", "times": 3})
+                assert not res.is_error, res.content
+                return dict(res.structured_content or {})
+
+        assert asyncio.run(asyncio.wait_for(talk(), 60)) == {"text": "ababab"}
+    finally:
+        svc.stop()
+        for sub in ("proto_gen", "robonix_mcp_types"):
+            if str(codegen / sub) in sys.path:
+                sys.path.remove(str(codegen / sub))
+        sys.modules.pop("c4_echo_types", None)
