@@ -33,8 +33,8 @@ def find_pkg_root(start: Path) -> Path | None:
 def ensure_proto_gen(start: Path | None = None) -> Path | None:
     """robonix-api's name: put a package's own ``rbnx-build/codegen/proto_gen`` (and
     ``robonix_mcp_types``) on ``sys.path`` when one exists at or above ``start``; returns that codegen
-    folder, else None. Without one, the bundled protos answer the same top-level names
-    (:mod:`robonix_api.proto_alias`)."""
+    folder, else None. The names of the bundled protos (``atlas_pb2``, ``robonix_contracts_pb2_grpc``,
+    ...) keep resolving to the bundled modules either way (:mod:`robonix_api.proto_alias` explains why)."""
     from robonix_api import proto_alias
 
     proto_alias.install()

@@ -3,9 +3,11 @@
 robonix's ``rbnx codegen`` writes ``atlas_pb2``, ``lifecycle_pb2``, ``robonix_contracts_pb2_grpc``,
 ``<ros package>_pb2`` ... into ``<pkg>/rbnx-build/codegen/proto_gen`` and robonix-api puts that folder
 on ``sys.path``, so package code imports them as top-level modules. This SDK ships the same modules
-as ``robonix_api.proto_gen.*``. A finder placed *last* on ``sys.meta_path`` answers those top-level
-names with the bundled modules (the very same module objects, so message classes are identical); a
-package's own generated folder, being on ``sys.path``, still wins.
+as ``robonix_api.proto_gen.*``. A finder placed *first* on ``sys.meta_path`` answers exactly those
+top-level names with the bundled modules (the very same module objects, so message classes are
+identical). It must come before ``sys.path``: a package's own copy of, say, ``robonix_contracts_pb2``
+would register ``robonix_contracts.proto`` a second time in protobuf's default pool, which protobuf
+refuses ("duplicate file name"). A package's *other* generated modules still load from its folder.
 """
 
 from __future__ import annotations
@@ -48,9 +50,9 @@ class ProtoGenAliasFinder(importlib.abc.MetaPathFinder):
 
 
 def install() -> None:
-    """Append the finder to ``sys.meta_path`` once (idempotent)."""
+    """Put the finder first on ``sys.meta_path`` once (idempotent)."""
     if not any(isinstance(f, ProtoGenAliasFinder) for f in sys.meta_path):
-        sys.meta_path.append(ProtoGenAliasFinder())
+        sys.meta_path.insert(0, ProtoGenAliasFinder())
 
 
 __all__ = ["ProtoGenAliasFinder", "bundled_names", "install"]

@@ -444,3 +444,22 @@ def test_mcp_tool_of_a_package_contract_with_codegen_types(tmp_path: Path, fake_
             if str(codegen / sub) in sys.path:
                 sys.path.remove(str(codegen / sub))
         sys.modules.pop("c4_echo_types", None)
+
+
+def test_bundled_proto_names_win_over_a_package_copy(tmp_path: Path) -> None:
+    """A package's own ``robonix_contracts_pb2`` next to ours would be a duplicate proto file name, which
+    protobuf refuses; the bundled module answers the name, the package's other modules still load."""
+    gen = tmp_path / "proto_gen"
+    gen.mkdir()
+    (gen / "robonix_contracts_pb2.py").write_text("raise ImportError('the package copy was imported')\n")
+    (gen / "c5_speech_pb2.py").write_text("import robonix_contracts_pb2\nOURS = robonix_contracts_pb2\n")
+    sys.path.insert(0, str(gen))
+    try:
+        sys.modules.pop("robonix_contracts_pb2", None)
+        speech = importlib.import_module("c5_speech_pb2")
+        from robonix_api.proto_gen import robonix_contracts_pb2
+
+        assert speech.OURS is robonix_contracts_pb2
+    finally:
+        sys.path.remove(str(gen))
+        sys.modules.pop("c5_speech_pb2", None)
