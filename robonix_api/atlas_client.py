@@ -408,12 +408,12 @@ def _looks_like_transport(value: Any) -> bool:
     if isinstance(value, Transport) or (isinstance(value, int) and not isinstance(value, bool)):
         return True
     if isinstance(value, str):
-        try:
-            Transport.parse(value)
-        except ValueError:
-            return value.strip().lower() == "ros"
-        return value.strip() != ""
+        name = value.strip().upper().replace("-", "_").removeprefix("TRANSPORT_")
+        return name in _TRANSPORT_NAMES or (name.isdigit() and int(name) in Transport._value2member_map_)
     return False
+
+
+_TRANSPORT_NAMES = frozenset(Transport.__members__) | {"ROS"}
 
 
 class RobonixAtlas(AtlasClient):

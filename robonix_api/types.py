@@ -25,6 +25,10 @@ class _WireEnum(IntEnum):
         return ""
 
     @classmethod
+    def _aliases(cls) -> dict[str, str]:
+        return {}
+
+    @classmethod
     def parse(cls, value: Any) -> Any:
         """``None``/``""`` -> UNSPECIFIED; ints must be a known value; strings match case-insensitively
         with or without the proto prefix (``"ros2"``, ``"ROS2"``, ``"TRANSPORT_ROS2"``)."""
@@ -44,6 +48,7 @@ class _WireEnum(IntEnum):
             prefix = cls._prefix()
             if prefix and name.startswith(prefix):
                 name = name[len(prefix) :]
+            name = cls._aliases().get(name, name)
             if name in cls.__members__:
                 return cls.__members__[name]
             if name.isdigit():
@@ -91,6 +96,10 @@ class Transport(_WireEnum):
     @classmethod
     def _prefix(cls) -> str:
         return "TRANSPORT_"
+
+    @classmethod
+    def _aliases(cls) -> dict[str, str]:
+        return {"ROS": "ROS2"}  # robonix-api accepts "ros" too
 
 
 class LifecycleState(_WireEnum):

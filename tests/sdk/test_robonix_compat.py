@@ -91,6 +91,7 @@ def test_transport_and_endpoint_in_either_order() -> None:
     assert split_transport_endpoint(Transport.ROS2, "/scan") == (Transport.ROS2, "/scan")  # robonix-api
     assert split_transport_endpoint("/scan", "ros2") == (Transport.ROS2, "/scan")  # ours
     assert split_transport_endpoint("127.0.0.1:5", 1) == (Transport.GRPC, "127.0.0.1:5")
+    assert split_transport_endpoint("ros", "/odom") == (Transport.ROS2, "/odom")  # robonix-api's alias
     with pytest.raises(ValueError, match="cannot tell which"):
         split_transport_endpoint("/a", "/b")
 
