@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from robonix_api import proto_alias
+from robonix_api import (
+    forksafe,  # noqa: F401  (before anything imports grpc)
+    proto_alias,
+)
 from robonix_api.grpc_contracts import StatusError
 from robonix_api.provider import Primitive, Service, Skill
 from robonix_api.result import Deferred, Err, Ok, Result
