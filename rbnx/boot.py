@@ -42,6 +42,7 @@ class BootOptions:
     progress: bool = True
     verbose: bool = False
     exit_after_boot: bool = False
+    gateway: bool = True  # serve the deployment's MCP gateway (not with exit_after_boot: it lives in rbnx)
     timing: Timing = field(default_factory=Timing)
 
 
@@ -219,6 +220,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     spath = state_path(deploy.path)
     atlas_group: ProcGroup | None = None
     orch: Orchestrator | None = None
+    gateway: Any = None
     state: dict[str, Any] = {"pid": os.getpid(), "deploy": str(deploy.path), "log_dir": str(opts.log_dir.resolve()),
                              "started": time.time(), "atlas": None, "atlas_proc": None, "children": []}
     state["start_ticks"] = proc_start_ticks(os.getpid())
@@ -246,6 +248,11 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
         orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
+        gateway = _start_gateway(orch, atlas_addr, opts, sig)
+        if gateway is not None:
+            state["gateway"] = gateway.url
+            save()
+            print(f"MCP gateway: {gateway.url}", flush=True)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()
         if sig.stop.is_set():
@@ -265,7 +272,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         return code
     finally:
         if not keep:
-            _teardown(orch, atlas_group, opts, sig)
+            _teardown(orch, atlas_group, opts, sig, gateway)
             remove_state(spath)
         sig.restore()
 
@@ -280,14 +287,32 @@ def _report_exits(orch: Orchestrator, atlas_group: ProcGroup, reported: set[str]
                   file=sys.stderr, flush=True)
 
 
-def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals) -> None:
-    """Reverse-order shutdown of entries, then the atlas."""
+def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals) -> Any:
+    """The MCP gateway (agents' one endpoint; its `shutdown` tool stops this boot); None if off or failed."""
+    if not opts.gateway or opts.exit_after_boot:
+        return None
+    from rbnx.gateway import start_for_boot
+    from robonix_api import telemetry
+
+    telemetry.setup("rbnx")
+    try:
+        return start_for_boot(atlas_addr, orch.runners, sig.stop.set, opts.timing.driver_timeout)
+    except (RuntimeError, OSError) as exc:
+        print(f"rbnx boot: MCP gateway not started: {exc}", file=sys.stderr, flush=True)
+        return None
+
+
+def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals,
+              gateway: Any = None) -> None:
+    """Reverse-order shutdown of entries, then the gateway and the atlas."""
     if orch is None and atlas_group is None:
         return
     term = opts.term_timeout if sig.count < 2 else min(opts.term_timeout, 2.0)
     print("shutting down…", flush=True)
     if orch is not None:
         orch.shutdown(term)
+    if gateway is not None:
+        gateway.stop()
     if atlas_group is not None:
         atlas_group.stop(min(term, 10.0))
         print("atlas stopped", flush=True)
