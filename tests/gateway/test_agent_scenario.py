@@ -16,9 +16,11 @@ import base64
 import gzip
 import io
 import json
+import os
 import re
 import secrets
 import shutil
+import subprocess
 import threading
 import time
 from collections.abc import Iterator
@@ -35,7 +37,7 @@ from opentelemetry.proto.collector.trace.v1.trace_service_pb2 import (
     ExportTraceServiceResponse,
 )
 from PIL import Image
-from support.boot import RbnxBoot
+from support.boot import RbnxBoot, rbnx_cmd
 from support.procs import REPO, wait_until
 
 from robonix_api.atlas_client import AtlasClient
@@ -305,6 +307,37 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     assert {"robot_x", "robot_y", "robot_yaw", "origin_x", "origin_y"} <= set(g)
     # the agent's lifecycle transitions are spans too (on the provider that made them)
     assert rx.find("lifecycle.activate", service="mapping") and rx.find("lifecycle.deactivate", service="mapping")
+
+
+def rbnx(deployment: Deployment, *args: str) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, RBNX_STATE_DIR=str(deployment.boot.state_dir))
+    return subprocess.run([*rbnx_cmd(), "--atlas", deployment.state["atlas"], *args], env=env, text=True,
+                          capture_output=True, timeout=600)
+
+
+@pytest.mark.timeout(900)
+def test_a_person_at_a_terminal(deployment: Deployment) -> None:
+    deploy = deployment.state["deploy"]
+    tools = rbnx(deployment, "tools")
+    assert tools.returncode == 0 and deployment.url in tools.stdout, tools.stdout + tools.stderr
+    listed = rbnx(deployment, "lifecycle", "-f", deploy)
+    assert listed.returncode == 0, listed.stderr
+    assert re.search(r"^mapping\s+service\s+active", listed.stdout, re.M), listed.stdout
+    assert re.search(r"^nav2\s+service\s+active", listed.stdout, re.M), listed.stdout
+
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "deactivate")
+    assert (r.returncode, r.stdout.strip()) == (0, "mapping: inactive"), r.stderr
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure", "-s", "map_publish_period_s=-1")
+    assert r.returncode == 1 and "map_publish_period_s" in r.stderr, r.stdout + r.stderr  # the provider's reason
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure", "-s", "map_publish_period_s=0.7")
+    assert (r.returncode, r.stdout.strip()) == (0, "mapping: inactive"), r.stderr
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "activate")
+    assert (r.returncode, r.stdout.strip()) == (0, "mapping: active"), r.stderr
+
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "nosuch", "activate")
+    assert r.returncode == 1 and "unknown entry 'nosuch'; known: panda_mobile, mapping, nav2" in r.stderr, r.stderr
+    r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure")
+    assert r.returncode == 2 and "-s KEY=VALUE or --patch" in r.stderr and "Traceback" not in r.stderr
 
 
 @pytest.mark.timeout(600)
