@@ -88,9 +88,7 @@ class McpToolServer:
     def __init__(self, name: str, tools: list[McpTool], host: str = "127.0.0.1") -> None:
         self._tools = {t.name: t for t in tools}
         self._host = host
-        self._server: uvicorn.Server | None = None
-        self._thread: threading.Thread | None = None
-        self._sock: socket.socket | None = None
+        self._http: BackgroundHttp | None = None
         self.port = 0
         self._mcp = Server(name, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
                            get_tool_input_schema=self._schema_of)
@@ -116,19 +114,42 @@ class McpToolServer:
     def start(self, timeout_s: float = 30.0) -> int:
         """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
         app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host)
+        self._http = BackgroundHttp(app, self._host, "mcp-server")
+        self.port = self._http.start(timeout_s)
+        return self.port
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        if self._http is not None:
+            self._http.stop(timeout_s)
+            self._http = None
+
+
+class BackgroundHttp:
+    """An ASGI app served by uvicorn on a daemon thread, on a port of the OS's choosing (MCP servers)."""
+
+    def __init__(self, app: Any, host: str, name: str) -> None:
+        self.app, self.host, self.name = app, host, name
+        self.port = 0
+        self._server: uvicorn.Server | None = None
+        self._thread: threading.Thread | None = None
+        self._sock: socket.socket | None = None
+
+    def start(self, timeout_s: float = 30.0) -> int:
+        """Bind port 0, serve, return the port once uvicorn accepts connections."""
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((self._host, 0))
+        sock.bind((self.host, 0))
         self.port = sock.getsockname()[1]
-        config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
+        config = uvicorn.Config(self.app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [sock]},
-                                        name="mcp-server", daemon=True)
+                                        name=self.name, daemon=True)
         self._thread.start()
         deadline = time.monotonic() + timeout_s
         while not self._server.started:
             if not self._thread.is_alive() or time.monotonic() > deadline:
-                raise RuntimeError(f"MCP server on {self._host}:{self.port} did not start")
+                sock.close()
+                raise RuntimeError(f"{self.name} on {self.host}:{self.port} did not start")
             time.sleep(0.02)
         self._sock = sock
         return self.port

@@ -19,9 +19,6 @@ from __future__ import annotations
 
 import json
 import logging
-import socket
-import threading
-import time
 import weakref
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
@@ -31,7 +28,6 @@ from typing import Any
 import anyio
 import anyio.to_thread
 import mcp_types as types
-import uvicorn
 from mcp.server import Server
 from mcp.server.lowlevel.server import NotificationOptions
 from mcp.server.subscriptions import InMemorySubscriptionBus, ListenHandler, ToolsListChanged
@@ -39,6 +35,7 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
+from robonix_api.mcp_server import BackgroundHttp
 from robonix_api.proto_gen import atlas_pb2
 
 log = logging.getLogger("rbnx.gateway")
@@ -118,40 +115,21 @@ class Gateway:
                                              "cleanup/reset, shutdown) to decide which services run."),
                                lifespan=self._lifespan, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
                                on_subscriptions_listen=self._on_listen)
-        self._uv: uvicorn.Server | None = None
-        self._thread: threading.Thread | None = None
-        self._sock: socket.socket | None = None
+        self._http: BackgroundHttp | None = None
 
     # ------------------------------------------------------------------ serving
     def start(self, timeout_s: float = 30.0) -> str:
         app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host)
-        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((self.host, 0))
-        port = sock.getsockname()[1]
-        self._uv = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2))
-        self._thread = threading.Thread(target=self._uv.run, kwargs={"sockets": [sock]}, name="mcp-gateway",
-                                        daemon=True)
-        self._thread.start()
-        deadline = time.monotonic() + timeout_s
-        while not self._uv.started:
-            if not self._thread.is_alive() or time.monotonic() > deadline:
-                raise RuntimeError(f"MCP gateway on {self.host}:{port} did not start")
-            time.sleep(0.02)
-        self._sock = sock
+        self._http = BackgroundHttp(app, self.host, "mcp-gateway")
+        port = self._http.start(timeout_s)
         self.url = f"http://{self.host}:{port}{MCP_PATH}"
         return self.url
 
     def stop(self, timeout_s: float = 5.0) -> None:
-        self._listen.close()
-        if self._uv is not None:
-            self._uv.should_exit = True
-        if self._thread is not None:
-            self._thread.join(timeout_s)
-        self._uv = self._thread = None
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
+        self._listen.close()  # end listen streams gracefully, so uvicorn's shutdown does not wait on them
+        if self._http is not None:
+            self._http.stop(timeout_s)
+            self._http = None
 
     @asynccontextmanager
     async def _lifespan(self, _server: Any) -> AsyncIterator[dict[str, Any]]:
