@@ -116,6 +116,8 @@ class Gateway:
                                lifespan=self._lifespan, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
                                on_subscriptions_listen=self._on_listen)
         self._http: BackgroundHttp | None = None
+        self._tg: Any = None  # the lifespan's task group: the watcher and the provider links run in it
+        self._links: dict[str, _Link] = {}
 
     # ------------------------------------------------------------------ serving
     def start(self, timeout_s: float = 30.0) -> str:
@@ -135,9 +137,11 @@ class Gateway:
     async def _lifespan(self, _server: Any) -> AsyncIterator[dict[str, Any]]:
         """The atlas watcher runs on the server's own event loop, so notifications need no hand-off."""
         async with anyio.create_task_group() as tg:
+            self._tg = tg
             tg.start_soon(self._watch)
             yield {}
             tg.cancel_scope.cancel()
+            self._tg = None
 
     # ------------------------------------------------------------------ following the atlas
     async def _watch(self) -> None:
@@ -166,6 +170,9 @@ class Gateway:
                 self._by_provider[pid] = fetched
                 self._seen[pid] = key
         tools = {t.name: t for ts in self._by_provider.values() for t in ts}
+        urls = {t.url for t in tools.values()}
+        for url in [u for u in self._links if u not in urls]:  # a provider left: drop its session
+            self._links.pop(url).close()
         changed = set(tools) != set(self._tools) or any(
             tools[n].tool != self._tools[n].tool or tools[n].url != self._tools[n].url for n in tools)
         self._tools = tools
@@ -243,10 +250,31 @@ class Gateway:
         if tool is None:
             return _text_result(self._unknown(name), error=True)
         try:
-            return await forward(tool.url, tool.tool.name, args)
+            return await self._forward(tool.url, tool.tool.name, args)
         except Exception as exc:  # the provider went away mid-call, or answered garbage
             return _text_result(f"{name}: call to {tool.provider} at {tool.url} failed: {type(exc).__name__}: {exc}",
                                 error=True)
+
+    async def _forward(self, url: str, tool: str, args: dict[str, Any]) -> types.CallToolResult:
+        """On the provider's kept-open session; a broken one is replaced once, else a one-off session."""
+        for _ in range(2):
+            link = self._links.get(url)
+            if link is None or link.dead:
+                if self._tg is None:
+                    break
+                link = self._links[url] = _Link(url)
+                self._tg.start_soon(link.run)
+            client = await link.wait()
+            if client is None:
+                self._links.pop(url, None)
+                continue
+            try:
+                return await client.call_tool(tool, args)
+            except Exception as exc:  # the session broke (provider restarted?): retry on a fresh one
+                log.info("session to %s broke (%s); reconnecting", url, exc)
+                link.close()
+                self._links.pop(url, None)
+        return await forward(url, tool, args)
 
     def _unknown(self, name: str) -> str:
         entry, dot, _ = name.partition(".")
@@ -279,6 +307,41 @@ class Gateway:
         except ControlError as exc:
             return _text_result(f"{name}: {exc}", error=True)
         return _text_result(json.dumps(result), result)
+
+
+class _Link:
+    """A kept-open MCP session to one provider, owned by a task of the gateway (sessions are task-bound)."""
+
+    def __init__(self, url: str) -> None:
+        self.url = url
+        self.client: Any = None
+        self.dead = False
+        self._ready = anyio.Event()
+        self._closed = anyio.Event()
+
+    async def run(self) -> None:
+        from mcp import Client
+
+        try:
+            async with Client(self.url, read_timeout_seconds=CALL_TIMEOUT_S) as client:
+                self.client = client
+                self._ready.set()
+                await self._closed.wait()
+        except Exception as exc:  # could not connect, or the session ended badly
+            log.info("session to %s ended: %s", self.url, exc)
+        finally:
+            self.dead = True
+            self.client = None
+            self._ready.set()
+
+    async def wait(self) -> Any:
+        with anyio.move_on_after(FETCH_TIMEOUT_S):
+            await self._ready.wait()
+        return self.client
+
+    def close(self) -> None:
+        self.dead = True
+        self._closed.set()
 
 
 async def fetch_tools(url: str) -> list[types.Tool]:
