@@ -41,6 +41,7 @@ from support.boot import RbnxBoot, rbnx_cmd
 from support.procs import REPO, wait_until
 
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.dds import DdsNode, MapLifecycle
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 
@@ -307,6 +308,20 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     assert {"robot_x", "robot_y", "robot_yaw", "origin_x", "origin_y"} <= set(g)
     # the agent's lifecycle transitions are spans too (on the provider that made them)
     assert rx.find("lifecycle.activate", service="mapping") and rx.find("lifecycle.deactivate", service="mapping")
+
+
+@pytest.mark.timeout(300)
+def test_slam_publishes_its_lifecycle(deployment: Deployment) -> None:
+    """robonix/service/map/lifecycle is declared and latched: a late subscriber sees the latest state."""
+    with AtlasClient(deployment.state["atlas"]) as atlas, atlas.connect_capability(
+            consumer_id="lifecycle_test", provider_id="mapping", contract_id="robonix/service/map/lifecycle",
+            transport="ros2") as ch:
+        topic = ch.endpoint
+    with DdsNode(name="map_lifecycle_test") as node:
+        msg = node.wait_for_message(topic, MapLifecycle, 60, "transient_local")
+    assert msg is not None, f"nothing latched on {topic}"
+    # INIT (paused), activate, deactivate (paused), activate: the agent's decisions, in order
+    assert msg.mode == "mapping" and msg.generation >= 4 and msg.map_id == "", msg
 
 
 def rbnx(deployment: Deployment, *args: str) -> subprocess.CompletedProcess[str]:
