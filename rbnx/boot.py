@@ -225,10 +225,19 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
                              "started": time.time(), "atlas": None, "atlas_proc": None, "children": []}
     state["start_ticks"] = proc_start_ticks(os.getpid())
 
+    save_lock = threading.Lock()  # the gateway thread records its URL too
+
     def save() -> None:
-        if orch is not None:
-            state["children"] = [r.describe() for r in orch.runners if r.proc is not None]
-        write_state(spath, state, copy_to=opts.log_dir / "rbnx-boot.json")
+        with save_lock:
+            if orch is not None:
+                state["children"] = [r.describe() for r in orch.runners if r.proc is not None]
+            write_state(spath, state, copy_to=opts.log_dir / "rbnx-boot.json")
+
+    def gateway_ready(url: str) -> None:
+        with save_lock:
+            state["gateway"] = url
+        save()
+        print(f"MCP gateway: {url}", flush=True)
 
     code = 1
     keep = False
@@ -248,11 +257,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
         orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
-        gateway = _start_gateway(orch, atlas_addr, opts, sig)
-        if gateway is not None:
-            state["gateway"] = gateway.url
-            save()
-            print(f"MCP gateway: {gateway.url}", flush=True)
+        gateway = _start_gateway(orch, atlas_addr, opts, sig, gateway_ready)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()
         if sig.stop.is_set():
@@ -287,19 +292,16 @@ def _report_exits(orch: Orchestrator, atlas_group: ProcGroup, reported: set[str]
                   file=sys.stderr, flush=True)
 
 
-def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals) -> Any:
-    """The MCP gateway (agents' one endpoint; its `shutdown` tool stops this boot); None if off or failed."""
+def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals, on_ready: Any) -> Any:
+    """The MCP gateway (agents' one endpoint; its `shutdown` tool stops this boot), started on a thread
+    while the entries boot; None when off (and with --exit-after-boot: it lives in this process)."""
     if not opts.gateway or opts.exit_after_boot:
         return None
-    from rbnx.gateway import start_for_boot
+    from rbnx.gateway import BootGateway
     from robonix_api import telemetry
 
     telemetry.setup("rbnx")
-    try:
-        return start_for_boot(atlas_addr, orch.runners, sig.stop.set, opts.timing.driver_timeout)
-    except (RuntimeError, OSError) as exc:
-        print(f"rbnx boot: MCP gateway not started: {exc}", file=sys.stderr, flush=True)
-        return None
+    return BootGateway(atlas_addr, orch.runners, sig.stop.set, opts.timing.driver_timeout, on_ready).start()
 
 
 def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals,

@@ -143,7 +143,7 @@ def deployment(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Deployment]
                 "OTEL_EXPORTER_OTLP_ENDPOINT": receiver.url, "OTEL_BSP_SCHEDULE_DELAY": "200"},
         "system": {"atlas": {"listen": "${RBNX_ATLAS_LISTEN:-127.0.0.1:0}"}},
         "primitive": [{"name": "panda_mobile", "path": str(REPO / "hal_panda_mobile"),
-                       "config": {"scene": ROOM, "real_time_factor": 3.0, "odom_noise": "none", "use_sim_time": True,
+                       "config": {"scene": ROOM, "real_time_factor": 2.0, "odom_noise": "none", "use_sim_time": True,
                                   "lidar_noise": {"noise_std": 0.0, "dropout_prob": 0.0}}}],
         "service": [
             {"name": "mapping", "path": str(REPO / "slam_service"), "autostart": False,
