@@ -157,8 +157,10 @@ def deployment(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Deployment]
     path.write_text(yaml.safe_dump(deploy, sort_keys=False))
     with RbnxBoot(path, tmp) as boot:
         try:
-            yield Deployment(boot, receiver, tmp / "maps")
+            _CURRENT[:] = [Deployment(boot, receiver, tmp / "maps")]
+            yield _CURRENT[0]
         finally:
+            _CURRENT.clear()
             if boot.proc.poll() is None:  # a failed test left it running: Ctrl-C it, as a person would
                 boot.interrupt()
             if boot.pids:
@@ -171,11 +173,25 @@ def deployment(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Deployment]
 
 # ---------------------------------------------------------------- the agent's helpers
 
+_CURRENT: list[Deployment] = []
+
+
+def _diagnostics() -> str:
+    """The tails of rbnx boot's output and of every entry's log, for a failure message."""
+    if not _CURRENT:
+        return ""
+    boot = _CURRENT[0].boot
+    parts = [f"--- rbnx boot ---\n{boot.output()[-1500:]}"]
+    for log in sorted(boot.logs.glob("*.log")):
+        parts.append(f"--- {log.name} ---\n{log.read_text(errors='replace')[-1500:]}")
+    return "\n".join(parts)
+
+
 
 async def call(c: Client, tool: str, args: dict[str, Any] | None = None) -> Any:
     r = await c.call_tool(tool, args or {})
     text = "".join(getattr(x, "text", "") for x in r.content)
-    assert not r.is_error, f"{tool}: {text}"
+    assert not r.is_error, f"{tool}: {text}\n{_diagnostics()}"
     return r.structured_content if r.structured_content is not None else json.loads(text)
 
 
@@ -188,7 +204,7 @@ async def poll(c: Client, what: str, fn: Any, timeout_s: float = DEADLINE_S) -> 
         if last:
             return last
         await asyncio.sleep(0.3)
-    raise AssertionError(f"timed out waiting for {what}; last {last!r}")
+    raise AssertionError(f"timed out waiting for {what}; last {last!r}\n{_diagnostics()}")
 
 
 async def services(c: Client) -> dict[str, dict[str, Any]]:
