@@ -1,7 +1,8 @@
 """One OpenTelemetry span per accepted Navigate goal, from acceptance to its terminal state.
 
-The span is a child of the caller's trace when the Navigate request carried W3C trace context, so an
-agent sees its goal as part of its own trace. It records the goal, the straight-line distance at the
+The span is a child of the caller's trace when the Navigate request carried W3C trace context (gRPC
+metadata; over MCP the SDK has already made the ``_meta`` context current), so an agent sees its goal
+as part of its own trace. It records the goal, the straight-line distance at the
 start, the distance actually driven, recoveries, the final distance to the goal and the end state
 (FAILED sets the span status to error with the reason). Only built when tracing is on
 (``robonix_api.telemetry``); the loop calls :meth:`GoalSpans.sweep` each tick to close finished runs.

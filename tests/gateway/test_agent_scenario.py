@@ -315,6 +315,22 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     assert a["nav.goal.x"] == pytest.approx(GOALS[0][0]) and a["nav.distance_driven_m"] > 0.5
     assert a["nav.recoveries"] >= 0 and a["nav.final_error_m"] < 0.5
 
+    # an agent's own trace over MCP, through the gateway: the MCP SDKs carry it in _meta.traceparent
+    from opentelemetry.sdk.trace import TracerProvider
+
+    agent_tracer = TracerProvider().get_tracer("agent")
+
+    async def agent() -> tuple[str, dict[str, Any]]:
+        async with Client(deployment.url, read_timeout_seconds=120) as c:
+            with agent_tracer.start_as_current_span("agent.task") as task:
+                st = await drive(c, *GOALS[1])
+            return format(task.get_span_context().trace_id, "032x"), st
+
+    agent_trace, st = asyncio.run(asyncio.wait_for(agent(), DEADLINE_S))
+    assert st["state"] == "SUCCEEDED", st
+    (span,) = wait_until(lambda: rx.find("nav.navigate", trace_id=agent_trace), 120, "the MCP goal's span", 0.2)
+    assert span["attrs"]["nav.run_id"] == st["run_id"]
+
     grids = wait_until(lambda: rx.find("slam.occupancy_grid"), 120, "a slam.occupancy_grid span", 0.2)
     g = grids[-1]["attrs"]
     img = Image.open(io.BytesIO(base64.b64decode(g["png_b64"])))
