@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 import threading
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -109,11 +110,19 @@ def context_from_carrier(carrier: Mapping[str, str]) -> Any:
 
 
 def grpc_metadata() -> list[tuple[str, str]]:
-    """``traceparent``/``tracestate`` of the current span as gRPC metadata (empty when off)."""
-    if _tracer is None:
+    """``traceparent``/``tracestate`` of the current span as gRPC metadata.
+
+    Also when this process does not trace but someone else's context is current (the gateway relays an
+    agent's MCP call, whose ``_meta`` the MCP SDK made current): the trace then continues in the provider.
+    Empty, and no OpenTelemetry import, in a process that neither traces nor has loaded OpenTelemetry.
+    """
+    if _tracer is None and "opentelemetry.trace" not in sys.modules:
         return []
+    from opentelemetry.trace import get_current_span
     from opentelemetry.trace.propagation.tracecontext import TraceContextTextMapPropagator
 
+    if not get_current_span().get_span_context().is_valid:
+        return []
     carrier: dict[str, str] = {}
     TraceContextTextMapPropagator().inject(carrier)
     return list(carrier.items())

@@ -324,12 +324,18 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
         async with Client(deployment.url, read_timeout_seconds=120) as c:
             with agent_tracer.start_as_current_span("agent.task") as task:
                 st = await drive(c, *GOALS[1])
+                await call(c, "deactivate", {"entry": "mapping"})
+                await call(c, "activate", {"entry": "mapping"})
             return format(task.get_span_context().trace_id, "032x"), st
 
     agent_trace, st = asyncio.run(asyncio.wait_for(agent(), DEADLINE_S))
     assert st["state"] == "SUCCEEDED", st
     (span,) = wait_until(lambda: rx.find("nav.navigate", trace_id=agent_trace), 120, "the MCP goal's span", 0.2)
     assert span["attrs"]["nav.run_id"] == st["run_id"]
+    # ... and so do the lifecycle transitions the agent asks the gateway for
+    for verb in ("deactivate", "activate"):
+        wait_until(lambda v=verb: rx.find(f"lifecycle.{v}", trace_id=agent_trace, service="mapping"), 120,
+                   f"lifecycle.{verb} in the agent's trace", 0.2)
 
     grids = wait_until(lambda: rx.find("slam.occupancy_grid"), 120, "a slam.occupancy_grid span", 0.2)
     g = grids[-1]["attrs"]
