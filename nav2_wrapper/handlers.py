@@ -13,6 +13,7 @@ from typing import Any
 
 from nav2_wrapper.core import GoalRecord
 from nav2_wrapper.core.navigator import FAILED, TERMINAL
+from robonix_api import telemetry
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 
 from .goals import parse_goal
@@ -39,7 +40,7 @@ class NavHandlers:
         return f"not initialized: {self._not_ready()}"
 
     # ---- navigate / status / cancel ----------------------------------------------------------------
-    def navigate(self, req: nav_pb.Navigate_Request) -> nav_pb.Navigate_Response:
+    def navigate(self, req: nav_pb.Navigate_Request, ctx: Any = None) -> nav_pb.Navigate_Response:
         """Send the robot to goal (geometry_msgs/PoseStamped; frame "map" or empty = map, a unit quaternion
         for the final heading, e.g. w=1 for yaw 0). A new goal preempts the running one. Returns accepted,
         run_id (poll it with the status tool) and a one-line detail, or the reason for rejection."""
@@ -47,7 +48,7 @@ class NavHandlers:
         if loop is None:
             return nav_pb.Navigate_Response(accepted=False, detail=self._uninit())
         goal = parse_goal(req.goal) if req.HasField("goal") else "goal: missing (a geometry_msgs/PoseStamped)"
-        rec, preempted = loop.navigate(goal)
+        rec, preempted = loop.navigate(goal, telemetry.context_from_grpc(ctx))
         if rec is None:
             return nav_pb.Navigate_Response(accepted=False, detail=INACTIVE)
         if not rec.accepted:

@@ -30,6 +30,7 @@ from .config import ProviderConfig
 from .goals import PlanarGoal
 from .inputs import Inputs, RobotState
 from .speed import SpeedLimits
+from .tracing import GoalSpans
 
 log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
@@ -59,6 +60,7 @@ class NavLoop:
         self._clock_last = -math.inf
         self._clock_wall = time.monotonic()
         self._paused = False
+        self._spans = GoalSpans.maybe(cfg.frames.map)  # None unless tracing is on
         self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
         self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
 
@@ -94,6 +96,8 @@ class NavLoop:
         with self.lock:
             self.accepting = False
             self._end_active(reason, canceled=True)
+            if self._spans is not None:
+                self._spans.end_all()
         self._stop.set()
         for t in (self._thread, self._watch):
             if t.is_alive() and t is not threading.current_thread():
@@ -110,11 +114,12 @@ class NavLoop:
                 p.close()
 
     # ---- goal API (handler threads) ----------------------------------------------------------------
-    def navigate(self, goal: PlanarGoal | str) -> tuple[GoalRecord | None, str]:
+    def navigate(self, goal: PlanarGoal | str, trace_parent: Any = None) -> tuple[GoalRecord | None, str]:
         """(record, preempted run_id or "").
 
         The record is None while not accepting goals (inactive); a rejected goal still gets a run_id
-        and a FAILED record, so its status can be asked for like any other run.
+        and a FAILED record, so its status can be asked for like any other run. With tracing on, an
+        accepted goal opens a span under ``trace_parent`` (the caller's trace context).
         """
         rid = f"nav-{uuid.uuid4().hex[:8]}"
         with self.lock:
@@ -131,6 +136,9 @@ class NavLoop:
             prev = self.nav.active
             live = prev is not None and prev.state not in TERMINAL
             rec = self.nav.navigate(*xyz, now, run_id=rid)
+            if rec.accepted and self._spans is not None:
+                self._spans.start(rec, trace_parent, self._state.pose if self._state is not None else None)
+                self._spans.sweep(None)  # a preempted run ends its span now
             if rec.accepted and live:
                 self.speed.run_ended(prev.run_id)
                 return rec, prev.run_id
@@ -147,6 +155,8 @@ class NavLoop:
                 self.nav.cancel(self.inputs.clock.now(), rec.run_id)
                 self.publish_zero()
                 self.speed.run_ended(rec.run_id)
+                if self._spans is not None:
+                    self._spans.sweep(None)
             return rec, was_live
 
     def status(self, run_id: str) -> GoalRecord | None:
@@ -203,6 +213,8 @@ class NavLoop:
         rec.detail = reason
         self.speed.run_ended(rec.run_id)
         self.publish_zero()
+        if self._spans is not None:
+            self._spans.sweep(None)
         log.info("run %s %s: %s", rec.run_id, rec.state, reason)
 
     def publish_zero(self) -> None:
@@ -229,6 +241,9 @@ class NavLoop:
                 self._watch_clock(now)
                 if reached:
                     self._step(now)
+                    if self._spans is not None:
+                        with self.lock:
+                            self._spans.sweep(self._state.pose if self._state is not None else None)
                     due += self.period
                     if now > due + self.period:  # fell behind (slow machine): skip, do not burst
                         due = now + self.period

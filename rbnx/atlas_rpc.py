@@ -13,6 +13,7 @@ from typing import Any
 
 import grpc
 
+from robonix_api import telemetry
 from robonix_api.proto_gen import (
     atlas_pb2,
     atlas_pb2_grpc,
@@ -172,7 +173,7 @@ class Driver:
 
     def call_async(self, command: int, config: dict[str, Any] | None, timeout: float) -> grpc.Future:
         req = lifecycle_pb2.Driver_Request(command=command, config_json="" if config is None else json.dumps(config))
-        return self._call.future(req, timeout=timeout)
+        return self._call.future(req, timeout=timeout, metadata=telemetry.grpc_metadata() or None)
 
     def call(self, command: int, config: dict[str, Any] | None, timeout: float) -> DriverReply:
         return self.result(self.call_async(command, config, timeout))

@@ -42,6 +42,7 @@ class BootOptions:
     progress: bool = True
     verbose: bool = False
     exit_after_boot: bool = False
+    gateway: bool = True  # serve the deployment's MCP gateway (not with exit_after_boot: it lives in rbnx)
     timing: Timing = field(default_factory=Timing)
 
 
@@ -219,14 +220,24 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     spath = state_path(deploy.path)
     atlas_group: ProcGroup | None = None
     orch: Orchestrator | None = None
+    gateway: Any = None
     state: dict[str, Any] = {"pid": os.getpid(), "deploy": str(deploy.path), "log_dir": str(opts.log_dir.resolve()),
                              "started": time.time(), "atlas": None, "atlas_proc": None, "children": []}
     state["start_ticks"] = proc_start_ticks(os.getpid())
 
+    save_lock = threading.Lock()  # the gateway thread records its URL too
+
     def save() -> None:
-        if orch is not None:
-            state["children"] = [r.describe() for r in orch.runners if r.proc is not None]
-        write_state(spath, state, copy_to=opts.log_dir / "rbnx-boot.json")
+        with save_lock:
+            if orch is not None:
+                state["children"] = [r.describe() for r in orch.runners if r.proc is not None]
+            write_state(spath, state, copy_to=opts.log_dir / "rbnx-boot.json")
+
+    def gateway_ready(url: str) -> None:
+        with save_lock:
+            state["gateway"] = url
+        save()
+        print(f"MCP gateway: {url}", flush=True)
 
     code = 1
     keep = False
@@ -246,6 +257,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
         orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
+        gateway = _start_gateway(orch, atlas_addr, opts, sig, gateway_ready)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()
         if sig.stop.is_set():
@@ -265,7 +277,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         return code
     finally:
         if not keep:
-            _teardown(orch, atlas_group, opts, sig)
+            _teardown(orch, atlas_group, opts, sig, gateway)
             remove_state(spath)
         sig.restore()
 
@@ -280,14 +292,29 @@ def _report_exits(orch: Orchestrator, atlas_group: ProcGroup, reported: set[str]
                   file=sys.stderr, flush=True)
 
 
-def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals) -> None:
-    """Reverse-order shutdown of entries, then the atlas."""
+def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals, on_ready: Any) -> Any:
+    """The MCP gateway (agents' one endpoint; its `shutdown` tool stops this boot), started on a thread
+    while the entries boot; None when off (and with --exit-after-boot: it lives in this process)."""
+    if not opts.gateway or opts.exit_after_boot:
+        return None
+    from rbnx.gateway import BootGateway
+    from robonix_api import telemetry
+
+    telemetry.setup("rbnx")
+    return BootGateway(atlas_addr, orch.runners, sig.stop.set, opts.timing.driver_timeout, on_ready).start()
+
+
+def _teardown(orch: Orchestrator | None, atlas_group: ProcGroup | None, opts: BootOptions, sig: _Signals,
+              gateway: Any = None) -> None:
+    """Reverse-order shutdown of entries, then the gateway and the atlas."""
     if orch is None and atlas_group is None:
         return
     term = opts.term_timeout if sig.count < 2 else min(opts.term_timeout, 2.0)
     print("shutting down…", flush=True)
     if orch is not None:
         orch.shutdown(term)
+    if gateway is not None:
+        gateway.stop()
     if atlas_group is not None:
         atlas_group.stop(min(term, 10.0))
         print("atlas stopped", flush=True)

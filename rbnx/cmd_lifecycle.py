@@ -55,7 +55,8 @@ def cmd_boot(args: argparse.Namespace) -> int:
         return 1
     opts = BootOptions(log_dir=Path(args.log_dir) if args.log_dir else default_log_dir(),
                        boot_timeout=args.boot_timeout, term_timeout=args.term_timeout,
-                       progress=not args.no_progress, verbose=args.verbose, exit_after_boot=args.exit_after_boot)
+                       progress=not args.no_progress, verbose=args.verbose, exit_after_boot=args.exit_after_boot,
+                       gateway=not getattr(args, "no_gateway", False))
     return run_boot(deploy, opts)
 
 

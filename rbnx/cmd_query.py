@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from pathlib import Path
 from typing import Any
 
 from google.protobuf.json_format import MessageToDict
@@ -151,6 +152,12 @@ def cmd_tools(args: argparse.Namespace, atlas: Atlas) -> int:
             rows.append([tool, p.id, c.contract_id, ep, c.description])
             out.append({"tool": tool, "provider": p.id, "contract_id": c.contract_id, "endpoint": ep,
                         "description": c.description, "input_schema_json": c.params.mcp.input_schema_json})
+    from rbnx.cmd_agents import gateways
+
+    for gw in gateways(atlas.addr):  # the deployment's one endpoint: every tool above + lifecycle tools
+        rows.insert(0, ["*", "gateway", Path(gw["deploy"]).name, gw["url"], "all tools as <entry>.<tool> + lifecycle"])
+        out.insert(0, {"tool": "*", "provider": "gateway", "contract_id": "", "endpoint": gw["url"],
+                       "deploy": gw["deploy"], "description": "MCP gateway of the deployment"})
     if args.json:
         print(json.dumps(out, indent=2))
     elif not rows:

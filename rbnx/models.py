@@ -134,6 +134,8 @@ class DeployEntry(BaseModel):
     branch: str | None = None
     manifest: str | None = None
     config: dict[str, Any] = {}
+    #: false: boot stops at INACTIVE and an agent (gateway) or `rbnx lifecycle` decides when it runs
+    autostart: bool = True
 
     _cfg = field_validator("config", mode="before")(lambda v: {} if v is None else v)
 
@@ -267,6 +269,7 @@ class ResolvedEntry:
     manifest_path: Path
     manifest: PackageManifest
     config: dict[str, Any]
+    autostart: bool = True
 
     @property
     def key(self) -> str:
@@ -383,7 +386,7 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
             except ManifestProblems as mp:
                 problems += mp.lines
                 continue
-            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config)))
+            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config), e.autostart))
     if problems:
         raise ManifestProblems(problems)
     atlas = model.system.atlas

@@ -75,7 +75,8 @@ class EntryRunner:
 
     @property
     def target(self) -> str:
-        return "inactive" if self.entry.kind == "skill" else "active"
+        """Skills and `autostart: false` entries stop at INACTIVE: someone else decides when they run."""
+        return "inactive" if self.entry.kind == "skill" or not self.entry.autostart else "active"
 
     @property
     def settled(self) -> bool:
@@ -189,7 +190,7 @@ class EntryRunner:
         what = "CMD_INIT" if self._cmd == CMD.CMD_INIT else "CMD_ACTIVATE"
         if reply.ok:
             self._backoff.reset()
-            if self._cmd == CMD.CMD_INIT and self.entry.kind != "skill":
+            if self._cmd == CMD.CMD_INIT and self.target == "active":
                 self._set("inactive")
                 self._send(CMD.CMD_ACTIVATE)
             else:

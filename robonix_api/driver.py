@@ -16,6 +16,7 @@ from typing import Any
 
 import grpc
 
+from robonix_api import telemetry
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 from robonix_api.result import Deferred, Err, Ok
 
@@ -200,6 +201,18 @@ class DriverServicer(robonix_contracts_pb2_grpc.RobonixLifecycleDriverServicer):
         self._lifecycle = lifecycle
 
     def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:  # noqa: N802
+        tracer = telemetry.tracer()
+        if tracer is None:
+            return self._drive(request, context)
+        verb = _COMMANDS.get(int(request.command), (str(request.command),))[0]
+        with tracer.start_as_current_span(f"lifecycle.{verb}", context=telemetry.context_from_grpc(context)) as span:
+            span.set_attribute("lifecycle.from_state", self._lifecycle.state)
+            reply = self._drive(request, context)
+            telemetry.set_attributes(span, (("lifecycle.ok", reply.ok), ("lifecycle.state", reply.state),
+                                            ("lifecycle.error", reply.error or None)))
+            return reply
+
+    def _drive(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:
         try:
             reply = self._lifecycle.handle(request.command, request.config_json)
         except ValueError as exc:  # malformed config_json: fail the RPC, naming the field

@@ -30,6 +30,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Generic, Protocol, TypeVar
 
+from robonix_api import telemetry
 from robonix_api.logsetup import setup_logging
 from robonix_api.result import Deferred, Err, Ok
 
@@ -197,7 +198,9 @@ def run_provider(build: str | Callable[[], Any], *, log_env: str) -> int:
     setup_logging(log_env)
     built = _load(build)()
     provider = built.provider if isinstance(built, SessionHost) else built
+    telemetry.setup(str(getattr(provider, "id", "") or "robonix-provider"))  # no-op unless OTEL_* ask for it
     provider.run()  # blocks until CMD_SHUTDOWN or SIGTERM/SIGINT; tears down cleanly
+    telemetry.shutdown()
     return 0
 
 

@@ -134,9 +134,10 @@ class McpToolServer:
 class AsgiServer:
     """An ASGI app (an MCP server's streamable-HTTP app) under uvicorn on a daemon thread, port 0."""
 
-    def __init__(self, app: Any, host: str = "127.0.0.1") -> None:
+    def __init__(self, app: Any, host: str = "127.0.0.1", name: str = "mcp-server") -> None:
         self._app = app
         self._host = host
+        self._name = name
         self._server: uvicorn.Server | None = None
         self._thread: threading.Thread | None = None
         self._sock: socket.socket | None = None
@@ -151,12 +152,13 @@ class AsgiServer:
         config = uvicorn.Config(self._app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [sock]},
-                                        name="mcp-server", daemon=True)
+                                        name=self._name, daemon=True)
         self._thread.start()
         deadline = time.monotonic() + timeout_s
         while not self._server.started:
             if not self._thread.is_alive() or time.monotonic() > deadline:
-                raise RuntimeError(f"MCP server on {self._host}:{self.port} did not start")
+                sock.close()
+                raise RuntimeError(f"{self._name} on {self._host}:{self.port} did not start")
             time.sleep(0.02)
         self._sock = sock
         return self.port

@@ -92,7 +92,7 @@ class MapHandlers:
         except (MapStoreError, ValueError) as exc:
             log.warning("load_map: %s", exc)
             return map_pb2.LoadMap_Response(ok=False, detail=str(exc))
-        s.work.replace_engine(engine)  # only once the map loaded: on any error the running engine is kept
+        s.work.replace_engine(engine, map_id)  # only once the map loaded: on any error the running engine is kept
         log.info("loaded map %r in %s mode", map_id, mode)
         return map_pb2.LoadMap_Response(ok=True, detail=f"loaded {map_id!r} in {mode} mode"
                                         + (f" at ({req.x:g}, {req.y:g}, {req.theta:g})" if pose else ""))

@@ -15,6 +15,7 @@ import logging
 import math
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -79,8 +80,13 @@ class SlamLoop:
     """The work of one session (see ``robonix_api.hosting``): subscriptions, worker and publisher threads."""
 
     def __init__(self, node: Any, bindings: dict[str, Binding], frames: Frames, engine: SlamEngine, map_pub: Any,
-                 *, use_sim_time: bool, map_period_s: float, tf_period_s: float, queue_size: int) -> None:
+                 *, use_sim_time: bool, map_period_s: float, tf_period_s: float, queue_size: int,
+                 map_id: str = "", on_map: Callable[[Any], None] | None = None,
+                 on_change: Callable[[], None] | None = None) -> None:
         self.frames, self.bindings = frames, bindings
+        self.map_id = map_id  # the saved map this session runs on ("" = a new map)
+        self._on_map = on_map  # after each /map publication, with the grid (telemetry)
+        self._on_change = on_change  # after the map was replaced or reset (lifecycle announcements)
         self.engine = engine
         self.lock = threading.RLock()  # guards the engine (worker, RPC handlers, publisher)
         self.integrating = False
@@ -238,6 +244,8 @@ class SlamLoop:
         self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
         self._map_clock, self._map_wall = now, wall
         self.counters["maps_published"] += 1
+        if self._on_map is not None:
+            self._on_map(grid)
 
     # ---------------------------------------------------------------- control (RPC / lifecycle threads)
     def set_integrating(self, on: bool) -> None:
@@ -250,14 +258,17 @@ class SlamLoop:
                 self.counters["scans_paused"] += len(self._queue)
                 self._queue.clear()
 
-    def replace_engine(self, engine: SlamEngine) -> None:
+    def replace_engine(self, engine: SlamEngine, map_id: str = "") -> None:
         """Swap in a freshly loaded engine (load_map): the map is republished at once."""
         with self.lock:
             self.engine = engine
+            self.map_id = map_id
             self._resumed = False  # the loaded engine has its own start pose
             self._m2o = engine.map_to_odom()
             self._map_dirty = True
             self._map_clock = self._map_wall = -math.inf
+        if self._on_change is not None:
+            self._on_change()
 
     def map_changed(self) -> None:
         """Force a /map publication (after reset_map / switch_mode), bypassing the rate cap."""
@@ -265,6 +276,8 @@ class SlamLoop:
             self._m2o = self.engine.map_to_odom()
             self._map_dirty = True
             self._map_clock = self._map_wall = -math.inf
+        if self._on_change is not None:
+            self._on_change()
 
     def set_pose(self, pose: tuple[float, float, float]) -> None:
         """A pose estimate (map frame) applied at the next scan; it wins over the resume re-anchoring."""

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from robonix_api import Deferred, Err, Service
-from robonix_api.dds import OccupancyGrid
+from robonix_api.dds import MapLifecycle, OccupancyGrid
 from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
@@ -24,12 +24,15 @@ from slam_service.core import SlamConfig, SlamEngine
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.telemetry import PAUSED, SHUTDOWN, LifecycleAnnouncer, MapSpans
 
 log = logging.getLogger("slam_service")
 
 DEFAULT_ID = "mapping"
 NAMESPACE = "robonix/service/map"
 OCCUPANCY_GRID = "robonix/service/map/occupancy_grid"
+MAP_LIFECYCLE = "robonix/service/map/lifecycle"
+LIFECYCLE_TOPIC = "/map_lifecycle"
 LIDAR = "robonix/primitive/lidar/lidar"
 ODOM = "robonix/primitive/chassis/odom"
 MAP_TOPIC = "/map"
@@ -66,7 +69,9 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         self.svc = svc
         install_engine_log_filter()
         self._map_pub: Any = None  # one /map writer for the process: its latched map outlives sessions
+        self._announcer: LifecycleAnnouncer | None = None  # robonix/service/map/lifecycle, same lifetime
         self.map_topic = svc.declare_ros2_topic(OCCUPANCY_GRID, MAP_TOPIC, qos=MAP_QOS)
+        self.lifecycle_topic = svc.declare_ros2_topic(MAP_LIFECYCLE, LIFECYCLE_TOPIC, qos=MAP_QOS)
         serve_contracts(svc, MapHandlers(self.current).table())
 
     def prepare(self, config: dict[str, Any]) -> SlamSetup | Err | Deferred:
@@ -97,9 +102,18 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         if self._map_pub is None:
             self._map_pub = self.svc.create_publisher(OCCUPANCY_GRID, topic=self.map_topic, msg_type=OccupancyGrid,
                                                       qos=MAP_QOS, declare=False)
+            self._announcer = LifecycleAnnouncer(self.svc.create_publisher(
+                MAP_LIFECYCLE, topic=self.lifecycle_topic, msg_type=MapLifecycle, qos=MAP_QOS, declare=False))
+        holder: list[SlamLoop] = []
+        spans = MapSpans.maybe(frame_id=cfg.frames.map, base_frame=cfg.frames.base, footprint=setup.footprint,
+                               robot_pose=lambda: _pose_if_known(holder[0]) if holder else None)
         loop = SlamLoop(self.svc.dds_node(), bindings, cfg.frames, setup.engine, self._map_pub,
                         use_sim_time=cfg.use_sim_time, map_period_s=cfg.map_publish_period_s,
-                        tf_period_s=cfg.tf_period_s, queue_size=cfg.scan_queue)
+                        tf_period_s=cfg.tf_period_s, queue_size=cfg.scan_queue, map_id=cfg.map_id or "",
+                        on_map=spans.on_map if spans is not None else None,
+                        on_change=lambda: self._announce(holder[0]) if holder else None)
+        holder.append(loop)
+        self._announce(loop)
         scan, odom = bindings["scan"], bindings["odom"]
         log.info("initialized: mode %s, scan %s (%s, %s), odom %s (%s, %s), map %s, map_dir %s", cfg.mode,
                  scan.topic, scan.qos, scan.provider_id or scan.source, odom.topic, odom.qos,
@@ -108,9 +122,29 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
 
     def activate(self, work: SlamLoop) -> None:
         work.set_integrating(True)
+        self._announce(work)
 
     def deactivate(self, work: SlamLoop) -> None:
         work.set_integrating(False)
+        self._announce(work)
+
+    def _announce(self, work: SlamLoop, mode: str = "") -> None:
+        """One MapLifecycle message: the SLAM mode while integrating, else ``paused`` (or ``mode``)."""
+        if self._announcer is not None:
+            self._announcer.announce(work.map_id, mode or (work.engine.mode if work.integrating else PAUSED))
+
+    def _on_shutdown(self) -> Any:
+        s = self.current()
+        if s is not None:
+            self._announce(s.work, SHUTDOWN)
+        return super()._on_shutdown()
+
+
+def _pose_if_known(work: SlamLoop) -> tuple[float, float, float] | None:
+    """The robot's map pose once SLAM has seen a scan (or localizes on a loaded map), else None."""
+    with work.lock:
+        known = work.engine.stats.scans_received > 0 or work.engine.mode == "localization"
+    return work.robot_pose() if known else None
 
 
 def build_provider(instance_id: str | None = None) -> SlamProvider:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.annotations import final
-from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint32
+from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint32, uint64
 
 from robonix_api.dds import _fastpath
 
@@ -248,11 +248,22 @@ class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
     clock: Time = field(default_factory=Time)
 
 
+# --- robonix map ----------------------------------------------------------------------------------
+@final
+@dataclass
+class MapLifecycle(IdlStruct, typename="map::msg::dds_::MapLifecycle_"):
+    """robonix/service/map/lifecycle (map/msg/MapLifecycle.msg): which map, in which mode, which generation."""
+
+    map_id: str = ""
+    mode: str = ""
+    generation: uint64 = 0
+
+
 ALL_TYPES = (
     Time, Duration, Header, Point, Point32, Vector3, Quaternion, Pose, Pose2D, PoseStamped,
     PoseWithCovariance, PoseWithCovarianceStamped, Twist, TwistStamped, TwistWithCovariance, Transform,
     TransformStamped, Polygon, PolygonStamped, Odometry, MapMetaData, OccupancyGrid, Path, LaserScan,
-    TFMessage, Clock,
+    TFMessage, Clock, MapLifecycle,
 )
 
 for _t in ALL_TYPES:
