@@ -35,7 +35,7 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
-from robonix_api.mcp_server import BackgroundHttp
+from robonix_api.mcp_server import AsgiServer
 from robonix_api.proto_gen import atlas_pb2
 
 log = logging.getLogger("rbnx.gateway")
@@ -115,14 +115,14 @@ class Gateway:
                                              "cleanup/reset, shutdown) to decide which services run."),
                                lifespan=self._lifespan, on_list_tools=self._list_tools, on_call_tool=self._call_tool,
                                on_subscriptions_listen=self._on_listen)
-        self._http: BackgroundHttp | None = None
+        self._http: AsgiServer | None = None
         self._tg: Any = None  # the lifespan's task group: the watcher and the provider links run in it
         self._links: dict[str, _Link] = {}
 
     # ------------------------------------------------------------------ serving
     def start(self, timeout_s: float = 30.0) -> str:
         app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host)
-        self._http = BackgroundHttp(app, self.host, "mcp-gateway")
+        self._http = AsgiServer(app, host=self.host, name="mcp-gateway")
         port = self._http.start(timeout_s)
         self.url = f"http://{self.host}:{port}{MCP_PATH}"
         return self.url
