@@ -1,0 +1,167 @@
+"""`rbnx record`: write DDS topics to an MCAP file that Foxglove and ``ros2 bag`` open.
+
+Each channel carries ROS 2 CDR (XCDR1 little-endian with its 4-byte encapsulation header, the bytes
+rmw_cyclonedds puts on the wire) and a ``ros2msg`` schema generated from the same IDL struct, so a reader
+needs no ROS install and no knowledge of this project. Log and publish times are the receive time (wall
+clock, ns), as rosbag2 records them; the messages keep their own header stamps (sim time under
+``use_sim_time``), and /clock is recorded as a topic, which is what replay uses as its time base.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import IO, Any
+
+from rbnx.rosmsg import DEFAULT_TOPICS, TopicError, TopicSpec, parse_topic, ros_name, schema_text
+
+# rosbag2's offered_qos_profiles metadata (rmw enum values: reliability 1 reliable / 2 best effort,
+# durability 1 transient local / 2 volatile, history 1 keep last), so `ros2 bag play` re-offers them.
+_QOS_YAML = ("- history: 1\n  depth: {depth}\n  reliability: {rel}\n  durability: {dur}\n"
+             "  deadline:\n    sec: 9223372036\n    nsec: 854775807\n"
+             "  lifespan:\n    sec: 9223372036\n    nsec: 854775807\n  liveliness: 1\n"
+             "  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n"
+             "  avoid_ros_namespace_conventions: false\n")
+
+
+def qos_metadata(qos: str) -> str:
+    rel = 2 if qos == "best_effort" else 1
+    dur = 1 if qos == "latched" else 2
+    return _QOS_YAML.format(depth=1 if qos == "latched" else 10, rel=rel, dur=dur)
+
+
+class McapRecorder:
+    """Subscribes to ``specs`` on a DDS domain and appends every sample to an MCAP file.
+
+    DDS callbacks run on the node's single dispatch thread, so writes never interleave; ``stop`` closes
+    the subscriptions before it finishes the file (summary, indexes).
+    """
+
+    def __init__(self, output: str | Path | IO[bytes], specs: list[TopicSpec] | tuple[TopicSpec, ...],
+                 domain_id: int | None = None) -> None:
+        self.output = output
+        self.specs = list(specs)
+        self.domain_id = domain_id
+        self.counts: dict[str, int] = {s.topic: 0 for s in self.specs}
+        self.bytes = 0
+        self._writer: Any = None
+        self._fh: IO[bytes] | None = None
+        self._node: Any = None
+        self._channels: dict[str, int] = {}
+        self._lock = threading.Lock()
+        self._closed = False
+
+    def start(self) -> None:
+        from mcap.writer import Writer
+
+        from robonix_api.dds import DdsNode
+
+        if isinstance(self.output, str | Path):
+            self._fh = open(self.output, "wb")  # noqa: SIM115 - kept open until stop()
+            out: Any = self._fh
+        else:
+            out = self.output
+        self._writer = Writer(out)
+        self._writer.start(profile="ros2", library="robonix-nav rbnx record")
+        schemas: dict[type, int] = {}
+        for s in self.specs:
+            if s.msg_type not in schemas:
+                schemas[s.msg_type] = self._writer.register_schema(
+                    name=ros_name(s.msg_type), encoding="ros2msg", data=schema_text(s.msg_type).encode())
+            self._channels[s.topic] = self._writer.register_channel(
+                topic=s.topic, message_encoding="cdr", schema_id=schemas[s.msg_type],
+                metadata={"offered_qos_profiles": qos_metadata(s.qos)})
+        self._node = DdsNode(domain_id=self.domain_id, name="rbnx_record")
+        for s in self.specs:
+            self._node.create_subscription(s.topic, s.msg_type, self._callback(s.topic), s.qos,
+                                           1 if s.qos == "latched" else 200)
+
+    def _callback(self, topic: str) -> Any:
+        channel = self._channels[topic]
+
+        def on_msg(msg: Any) -> None:
+            now = time.time_ns()
+            data = msg.serialize()
+            with self._lock:
+                if self._closed:
+                    return
+                self._writer.add_message(channel_id=channel, log_time=now, publish_time=now, data=data,
+                                         sequence=self.counts[topic])
+                self.counts[topic] += 1
+                self.bytes += len(data)
+
+        return on_msg
+
+    def stop(self) -> None:
+        """Close the subscriptions, then finish the file. Idempotent."""
+        node, self._node = self._node, None
+        if node is not None:
+            node.close()
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            if self._writer is not None:
+                self._writer.finish()
+            if self._fh is not None:
+                self._fh.close()
+
+    def summary(self) -> str:
+        parts = ", ".join(f"{t} {n}" for t, n in self.counts.items())
+        return f"{sum(self.counts.values())} messages ({self.bytes / 1e6:.1f} MB): {parts}"
+
+
+# ---------------------------------------------------------------------- CLI
+
+
+def add_parser(sub: Any) -> None:
+    r = sub.add_parser("record", help="record DDS topics to an MCAP file (ROS 2 CDR + ros2msg schemas)")
+    r.add_argument("-o", "--output", required=True, help="the .mcap file to write")
+    r.add_argument("topics", nargs="*", metavar="TOPIC",
+                   help="topics (default: " + " ".join(s.topic for s in DEFAULT_TOPICS)
+                   + "); other topics as /name:pkg/Type[:qos]")
+    r.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
+    r.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: the environment's)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no live message count")
+
+
+def cmd_record(args: argparse.Namespace) -> int:
+    try:
+        specs = [parse_topic(t) for t in args.topics] if args.topics else list(DEFAULT_TOPICS)
+    except TopicError as exc:
+        print(f"rbnx record: {exc}", file=sys.stderr)
+        return 2
+    if args.duration is not None and not args.duration > 0:
+        print(f"rbnx record: --duration: must be > 0, got {args.duration}", file=sys.stderr)
+        return 2
+    out = Path(args.output)
+    if out.suffix != ".mcap":
+        print(f"rbnx record: --output {out}: must end in .mcap", file=sys.stderr)
+        return 2
+    if not out.parent.is_dir():
+        print(f"rbnx record: --output {out}: directory {out.parent} does not exist", file=sys.stderr)
+        return 2
+    stop = threading.Event()
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    rec = McapRecorder(out, specs, args.domain_id)
+    try:
+        rec.start()
+        print(f"recording {', '.join(s.topic for s in specs)} to {out} (Ctrl-C stops)", flush=True)
+        deadline = None if args.duration is None else time.monotonic() + args.duration
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+            stop.wait(0.5 if deadline is None else max(0.0, min(0.5, deadline - time.monotonic())))
+            if not args.quiet and sys.stdout.isatty():
+                print(f"\r{rec.summary()}", end="", flush=True)
+    except OSError as exc:
+        print(f"rbnx record: {out}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    finally:
+        rec.stop()
+        for s, h in old.items():
+            signal.signal(s, h)
+    print(f"\n{out}: {rec.summary()}", flush=True)
+    return 0
