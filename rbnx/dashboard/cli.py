@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -60,11 +62,13 @@ def cmd_dashboard(args: argparse.Namespace) -> int:
         print(f"rbnx dashboard: {exc}", file=sys.stderr)
         return 1
     print(f"dashboard at {server.url} (Ctrl-C stops)", flush=True)
+    stop = threading.Event()
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        while server._thread is not None and server._thread.is_alive():
-            server._thread.join(0.5)
-    except KeyboardInterrupt:
-        pass
+        while not stop.is_set() and server.running():
+            stop.wait(0.5)
     finally:
         server.stop()
+        for s, h in old.items():
+            signal.signal(s, h)
     return 0

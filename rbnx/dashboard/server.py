@@ -103,7 +103,7 @@ def build_app(state: LiveState) -> Starlette:
 
 class DashboardServer:
     """LiveState + uvicorn; ``start()`` serves from a background thread (for boot/demo --dashboard),
-    ``serve()`` in the foreground (for `rbnx dashboard`)."""
+    `rbnx dashboard` waits on ``running()``."""
 
     def __init__(self, state: LiveState, host: str = "127.0.0.1", port: int = 8765) -> None:
         self.state = state
@@ -136,12 +136,8 @@ class DashboardServer:
             raise OSError(f"dashboard could not listen on {self.server.config.host}:{self.server.config.port}")
         return self.url
 
-    def serve(self) -> None:
-        self.state.start()
-        try:
-            self.server.run()
-        finally:
-            self.state.close()
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
 
     def stop(self) -> None:
         self.server.should_exit = True

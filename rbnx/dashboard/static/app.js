@@ -16,7 +16,7 @@ let drawPending = false;
 
 // Read by the browser test and the latency benchmark.
 const dash = window.__dash = {
-  mapVersion: 0, messages: 0, drawnPose: null, drawLog: [],
+  mapVersion: 0, mapMeta: null, messages: 0, drawnPose: null, drawLog: [],
   worldToCanvas: (x, y) => view ? [view.ox + (x - view.x0) * view.s, view.oy + (view.y1 - y) * view.s] : null,
   canvasToWorld: (cx, cy) => view ? [view.x0 + (cx - view.ox) / view.s, view.y1 - (cy - view.oy) / view.s] : null,
   // centre of grid cell (col, row) as in OccupancyGrid.data (row 0 = lowest y)
@@ -48,7 +48,7 @@ async function loadMap(meta) {
   if (!resp.ok) { loadingVersion = 0; return; }
   const img = await createImageBitmap(await resp.blob());
   if (mapMeta && mapMeta.version > meta.version) return;
-  mapImg = img; mapMeta = meta; dash.mapVersion = meta.version;
+  mapImg = img; mapMeta = meta; dash.mapMeta = meta; dash.mapVersion = meta.version;
   schedule();
 }
 
