@@ -37,6 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
         b.add_argument("--no-progress", action="store_true", help="no live progress view")
         b.add_argument("--exit-after-boot", action="store_true",
                        help="return after boot, leaving packages running (stop with rbnx shutdown)")
+        b.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
+                       help="also serve the live dashboard on 127.0.0.1:PORT (default 8765)")
 
     s = sub.add_parser("shutdown", help="stop a running boot of a deploy file")
     deploy_arg(s)
