@@ -260,3 +260,43 @@ def test_dashboard_in_headless_chromium(sim: dict[str, Any], dashboard: str) -> 
         finally:
             browser.close()
     assert not problems, problems
+
+
+# ---------------------------------------------------------------------- terminal: navigate / nav-status / cancel
+
+
+def _rbnx(atlas: str, *args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(rbnx_cmd() + ["--atlas", atlas, *args], capture_output=True, text=True,
+                          timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+def test_navigate_status_and_ctrl_c_cancels_from_a_terminal(sim: dict[str, Any]) -> None:
+    atlas = sim["atlas"]
+    r = _rbnx(atlas, "navigate", "3.5", "1.6", "--yaw", "1.57")  # back to the start pose, facing +y
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "SUCCEEDED" in r.stdout.splitlines()[-1], r.stdout
+    st = _rbnx(atlas, "nav-status")
+    assert st.returncode == 0 and st.stdout.startswith("SUCCEEDED"), st.stdout + st.stderr
+
+    # Ctrl-C while running: the goal is canceled, exit 130.
+    log = sim["tmp"] / "navigate.out"
+    with open(log, "w") as fh:
+        proc = subprocess.Popen(rbnx_cmd() + ["--atlas", atlas, "navigate", "8.3", "6.8"], stdout=fh,
+                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+    try:
+        wait_until(lambda: "RUNNING" in log.read_text() or proc.poll() is not None, 60, "the goal to run")
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(60) == 130, log.read_text()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    assert "interrupted: cancel sent" in log.read_text(), log.read_text()
+    run_id = next(ln.split("run ")[-1].strip() for ln in log.read_text().splitlines() if ": run " in ln)
+    st = wait_until(lambda: (lambda r: r if "CANCELED" in r.stdout else None)(_rbnx(atlas, "nav-status", run_id)),
+                    60, "the run to show CANCELED")
+    assert st.returncode == 0
+    again = _rbnx(atlas, "cancel", run_id)
+    assert again.returncode in (0, 1) and again.stdout.strip(), again.stdout + again.stderr
+    bad = _rbnx(atlas, "nav-status", "no-such-run")
+    assert bad.returncode == 1 and "unknown" in bad.stderr and "Traceback" not in bad.stderr

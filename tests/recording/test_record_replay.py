@@ -197,6 +197,11 @@ def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
     (["replay", "notes.txt"], "not a recording"),
     (["replay", "run.mcap", "--rate", "0"], "--rate: must be > 0"),
     (["replay", "run.mcap", "--remap", "/scan"], "FROM:=TO"),
+    (["navigate", "1", "nan"], "y: must be a finite number"),
+    (["navigate", "1", "2", "--frame", " "], "--frame: must not be empty"),
+    (["navigate", "1", "2", "--timeout", "-1"], "--timeout: must be >= 0"),
+    (["dashboard", "--port", "70000"], "--port: must be 0..65535"),
+    (["demo", "--dashboard", "70000"], "--dashboard: port must be 0..65535"),
 ])
 def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     (tmp_path / "notes.txt").write_text("x")
