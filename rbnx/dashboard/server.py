@@ -1,7 +1,7 @@
 """The dashboard's web server: one page, a WebSocket of state snapshots, the map PNG, three actions.
 
 Routes: ``/`` the page (package data in ``static/``), ``/ws`` pushes a JSON snapshot whenever the state
-changed (at most every ``MIN_PUSH_S``, so ≥ 5 Hz while the robot moves), ``/api/map.png`` the current
+changed (at most every ``MIN_PUSH_S``) and at least every ``MAX_PUSH_S`` (≥ 5 Hz), ``/api/map.png`` the current
 map image (the page fetches it only when the map's version changed), ``POST /api/goal`` ``{x, y, yaw}``,
 ``POST /api/cancel``, ``POST /api/lifecycle`` ``{provider, command}``. Binds 127.0.0.1 by default.
 """
@@ -24,6 +24,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from rbnx.dashboard.state import DashboardError, LiveState
 
 MIN_PUSH_S = 0.04
+MAX_PUSH_S = 0.2  # >= 5 updates/s also when nothing moves (the page shows it is live)
 STATIC = {"/": ("index.html", "text/html; charset=utf-8"),
           "/app.js": ("app.js", "text/javascript; charset=utf-8"),
           "/style.css": ("style.css", "text/css; charset=utf-8")}
@@ -83,10 +84,9 @@ def build_app(state: LiveState) -> Starlette:
         seen = -1
         try:
             while True:
-                version = await asyncio.to_thread(state.wait_change, seen, 1.0)
-                if version != seen:
-                    seen = version
-                    await socket.send_text(json.dumps(state.snapshot(), separators=(",", ":")))
+                # on every change (at most every MIN_PUSH_S), and at least every MAX_PUSH_S regardless
+                seen = await asyncio.to_thread(state.wait_change, seen, MAX_PUSH_S)
+                await socket.send_text(json.dumps(state.snapshot(), separators=(",", ":")))
                 await asyncio.sleep(MIN_PUSH_S)
         except (WebSocketDisconnect, RuntimeError):
             return
