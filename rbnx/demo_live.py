@@ -11,9 +11,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rbnx.rosmsg import DEFAULT_TOPICS, KNOWN
-
-RECORD_TOPICS = (*DEFAULT_TOPICS, KNOWN["/ground_truth/odom"])
+GROUND_TRUTH_TOPIC = "/ground_truth/odom"
 
 
 class DemoLive:
@@ -27,8 +25,10 @@ class DemoLive:
     def start(self, atlas: str, summary: dict[str, Any]) -> None:
         if self.record_path is not None:
             from rbnx.record import McapRecorder
+            from rbnx.rosmsg import DEFAULT_TOPICS, KNOWN
 
-            self.recorder = McapRecorder(self.record_path, RECORD_TOPICS, self.domain_id)
+            topics = (*DEFAULT_TOPICS, KNOWN[GROUND_TRUTH_TOPIC])
+            self.recorder = McapRecorder(self.record_path, topics, self.domain_id)
             self.recorder.start()
             summary["recording"] = str(self.record_path)
             print(f"recording to {self.record_path}", flush=True)

@@ -15,9 +15,13 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
-from rbnx.rosmsg import DEFAULT_TOPICS, TopicError, TopicSpec, parse_topic, ros_name, schema_text
+if TYPE_CHECKING:
+    from rbnx.rosmsg import TopicSpec
+
+# rbnx.rosmsg (and with it cyclonedds) is imported where it is used, so `rbnx --help` stays fast.
+DEFAULT_TOPIC_NAMES = "/scan /odom /tf /tf_static /map /plan /cmd_vel /clock"
 
 # rosbag2's offered_qos_profiles metadata (rmw enum values: reliability 1 reliable / 2 best effort,
 # durability 1 transient local / 2 volatile, history 1 keep last), so `ros2 bag play` re-offers them.
@@ -76,6 +80,7 @@ class McapRecorder:
         from cyclonedds.topic import Topic
         from mcap.writer import Writer
 
+        from rbnx.rosmsg import ros_name, schema_text
         from robonix_api.dds import DdsNode, dds_topic_name
         from robonix_api.dds.qos import resolve_qos
 
@@ -170,14 +175,15 @@ def add_parser(sub: Any) -> None:
     r = sub.add_parser("record", help="record DDS topics to an MCAP file (ROS 2 CDR + ros2msg schemas)")
     r.add_argument("-o", "--output", required=True, help="the .mcap file to write")
     r.add_argument("topics", nargs="*", metavar="TOPIC",
-                   help="topics (default: " + " ".join(s.topic for s in DEFAULT_TOPICS)
-                   + "); other topics as /name:pkg/Type[:qos]")
+                   help=f"topics (default: {DEFAULT_TOPIC_NAMES}); other topics as /name:pkg/Type[:qos]")
     r.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
     r.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: the environment's)")
     r.add_argument("-q", "--quiet", action="store_true", help="no live message count")
 
 
 def cmd_record(args: argparse.Namespace) -> int:
+    from rbnx.rosmsg import DEFAULT_TOPICS, TopicError, parse_topic
+
     try:
         specs = [parse_topic(t) for t in args.topics] if args.topics else list(DEFAULT_TOPICS)
     except TopicError as exc:

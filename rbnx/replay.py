@@ -21,8 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rbnx.rosmsg import KNOWN, type_by_name
-
 CLOCK = "/clock"
 
 
@@ -88,6 +86,7 @@ class Replayer:
 
     def run(self, stop: threading.Event | None = None,
             on_progress: Callable[[float, ReplayStats], None] | None = None) -> ReplayStats:
+        from rbnx.rosmsg import KNOWN, type_by_name
         from robonix_api.dds import Clock, DdsNode, Time
 
         stop = stop or threading.Event()

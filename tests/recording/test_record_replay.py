@@ -213,6 +213,8 @@ def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, argv: list[str], mes
     assert len(r.stderr.strip().splitlines()) == 1
 
 
-def test_default_topics_match_the_issue() -> None:
+def test_default_topics_match_the_issue_and_the_help_text() -> None:
+    from rbnx.record import DEFAULT_TOPIC_NAMES
+
     assert [s.topic for s in DEFAULT_TOPICS] == ["/scan", "/odom", "/tf", "/tf_static", "/map", "/plan",
-                                                  "/cmd_vel", "/clock"]
+                                                  "/cmd_vel", "/clock"] == DEFAULT_TOPIC_NAMES.split()

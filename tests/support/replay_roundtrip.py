@@ -36,6 +36,7 @@ REPLAY_TOPICS = ["/scan", "/odom", "/tf", "/tf_static", "/clock"]
 
 def replay_into_fresh_slam(live_mcap: Path, tmp: Path, rate: float = 1.0) -> tuple[Path, dict[str, Any]]:
     """(the replay session's recording, timings); every process started here is stopped here."""
+    tmp.mkdir(parents=True, exist_ok=True)
     deploy = tmp / "replay_deploy.yaml"
     deploy.write_text(REPLAY_DEPLOY.format(slam=REPO / "slam_service"))
     out = tmp / "replay_session.mcap"
