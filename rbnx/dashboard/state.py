@@ -93,6 +93,7 @@ class LiveState:
         self._tf: Any = None
         self._rpc: DemoRpc | None = None
         self._rpc_atlas = ""
+        self._rpc_lock = threading.Lock()
         self._thread = threading.Thread(target=self._poll, name="dashboard-poll", daemon=True)
 
     # ------------------------------------------------------------------ lifecycle
@@ -219,11 +220,20 @@ class LiveState:
         addr = self.atlas()
         if not addr:
             raise DashboardError("no atlas address yet (is the system booted?)")
-        if self._rpc is None or self._rpc_atlas != addr:
+        with self._rpc_lock:
+            if self._rpc is None or self._rpc_atlas != addr:
+                if self._rpc is not None:
+                    self._rpc.close()
+                self._rpc, self._rpc_atlas = DemoRpc(addr), addr
+            return self._rpc
+
+    def _forget_client(self) -> None:
+        """After a failed call: resolve the providers through the atlas again next time (one may have
+        restarted on another port)."""
+        with self._rpc_lock:
             if self._rpc is not None:
                 self._rpc.close()
-            self._rpc, self._rpc_atlas = DemoRpc(addr), addr
-        return self._rpc
+            self._rpc = None
 
     def send_goal(self, x: float, y: float, yaw: float) -> dict[str, Any]:
         for name, v in (("x", x), ("y", y), ("yaw", yaw)):
@@ -232,6 +242,7 @@ class LiveState:
         try:
             accepted, run_id, detail = self._client().navigate(Goal("dashboard", x, y, yaw), self.map_frame)
         except DemoError as exc:
+            self._forget_client()
             raise DashboardError(str(exc)) from None
         with self._lock:
             self._goal = {"x": x, "y": y, "yaw": yaw}
@@ -247,6 +258,7 @@ class LiveState:
         try:
             accepted, detail = self._client().cancel_run(self._run_id)
         except DemoError as exc:
+            self._forget_client()
             raise DashboardError(str(exc)) from None
         return {"accepted": accepted, "detail": detail}
 
@@ -300,7 +312,10 @@ class LiveState:
             return
         try:
             st = self._client().status(run_id)
-        except (DemoError, DashboardError):
+        except DemoError:
+            self._forget_client()
+            return
+        except DashboardError:
             return
         new = {"run_id": run_id, "state": st.state if st.known else "UNKNOWN", "detail": st.detail}
         with self._lock:
