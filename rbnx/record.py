@@ -185,7 +185,8 @@ def cmd_record(args: argparse.Namespace) -> int:
     from rbnx.rosmsg import DEFAULT_TOPICS, TopicError, parse_topic
 
     try:
-        specs = [parse_topic(t) for t in args.topics] if args.topics else list(DEFAULT_TOPICS)
+        specs = list({s.topic: s for s in map(parse_topic, args.topics)}.values()) if args.topics \
+            else list(DEFAULT_TOPICS)
     except TopicError as exc:
         print(f"rbnx record: {exc}", file=sys.stderr)
         return 2
