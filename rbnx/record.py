@@ -168,6 +168,42 @@ class McapRecorder:
             return f"{sum(self.counts.values())} messages ({self.bytes / 1e6:.1f} MB): {parts}"
 
 
+def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -> list[TopicSpec]:
+    """Type and QoS of topics we have no entry for, from DDS discovery (the writers' publication data):
+    what `ros2 bag record` does too. TopicError naming the topic when no writer shows up in time."""
+    from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+    from cyclonedds.qos import Policy
+
+    from rbnx.rosmsg import TopicError, TopicSpec, type_by_name
+    from robonix_api.dds import DdsNode, dds_topic_name
+
+    wanted = {dds_topic_name(n): n for n in names}
+    found: dict[str, TopicSpec] = {}
+    with DdsNode(domain_id=domain_id, name="rbnx_record_discovery") as node:
+        reader = BuiltinDataReader(node.participant, BuiltinTopicDcpsPublication)
+        deadline = time.monotonic() + timeout_s
+        while len(found) < len(wanted) and time.monotonic() < deadline:
+            for pub in reader.take(N=256):
+                name = wanted.get(getattr(pub, "topic_name", ""))
+                if name is None or name in found:
+                    continue
+                pkg, _, rest = pub.type_name.partition("::msg::dds_::")
+                cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}")
+                if cls is None:
+                    raise TopicError(f"topic {name}: its type {pub.type_name} is not one we can record")
+                best_effort = pub.qos[Policy.Reliability] == Policy.Reliability.BestEffort
+                latched = pub.qos[Policy.Durability] == Policy.Durability.TransientLocal
+                found[name] = TopicSpec(name, cls, "best_effort" if best_effort else
+                                        "latched" if latched else "reliable")
+            time.sleep(0.05)
+        reader.__del__()
+    missing = [n for n in names if n not in found]
+    if missing:
+        raise TopicError(f"topic {missing[0]}: no writer seen in {timeout_s:g} s to learn its type; "
+                         f"give it as {missing[0]}:pkg/Type")
+    return [found[n] for n in names]
+
+
 # ---------------------------------------------------------------------- CLI
 
 
@@ -175,21 +211,31 @@ def add_parser(sub: Any) -> None:
     r = sub.add_parser("record", help="record DDS topics to an MCAP file (ROS 2 CDR + ros2msg schemas)")
     r.add_argument("-o", "--output", required=True, help="the .mcap file to write")
     r.add_argument("topics", nargs="*", metavar="TOPIC",
-                   help=f"topics (default: {DEFAULT_TOPIC_NAMES}); other topics as /name:pkg/Type[:qos]")
+                   help=f"topics (default: {DEFAULT_TOPIC_NAMES}); the type of other topics is learnt from "
+                   "their writers, or give it as /name:pkg/Type[:qos]")
     r.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
     r.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: the environment's)")
+    r.add_argument("--discovery-timeout", type=float, default=5.0,
+                   help="seconds to wait for writers of topics given without a type (default 5)")
     r.add_argument("-q", "--quiet", action="store_true", help="no live message count")
 
 
 def cmd_record(args: argparse.Namespace) -> int:
-    from rbnx.rosmsg import DEFAULT_TOPICS, TopicError, parse_topic
+    from rbnx.rosmsg import DEFAULT_TOPICS, KNOWN, TopicError, parse_topic
 
+    names = list(dict.fromkeys("/" + t.strip().lstrip("/") if ":" not in t else t for t in args.topics))
+    unknown = [n for n in names if ":" not in n and n not in KNOWN]
     try:
-        specs = list({s.topic: s for s in map(parse_topic, args.topics)}.values()) if args.topics \
-            else list(DEFAULT_TOPICS)
+        specs = [parse_topic(t) for t in names if t not in unknown] if names else list(DEFAULT_TOPICS)
     except TopicError as exc:
         print(f"rbnx record: {exc}", file=sys.stderr)
         return 2
+    if unknown:
+        try:
+            specs += discover_topics(unknown, args.domain_id, args.discovery_timeout)
+        except TopicError as exc:
+            print(f"rbnx record: {exc}", file=sys.stderr)
+            return 2
     if args.duration is not None and not args.duration > 0:
         print(f"rbnx record: --duration: must be > 0, got {args.duration}", file=sys.stderr)
         return 2

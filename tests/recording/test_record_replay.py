@@ -190,7 +190,8 @@ def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("argv, message", [
     (["record", "-o", "x.txt"], "must end in .mcap"),
-    (["record", "-o", "run.mcap", "/foo"], "/foo: unknown type"),
+    (["record", "-o", "run.mcap", "/foo", "--discovery-timeout", "0.5"], "/foo: no writer seen in 0.5 s"),
+    (["record", "-o", "run.mcap", "/foo:nav_msgs/Nope"], "type 'nav_msgs/Nope'"),
     (["record", "-o", "nodir/run.mcap"], "does not exist"),
     (["record", "-o", "run.mcap", "--duration", "0"], "--duration"),
     (["replay", "missing.mcap"], "no such file"),
@@ -211,6 +212,19 @@ def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, argv: list[str], mes
     assert r.returncode == 2, r.stderr
     assert message in r.stderr and "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_record_learns_type_and_qos_of_other_topics_from_their_writers() -> None:
+    from rbnx.record import discover_topics
+
+    with DdsNode(name="writers") as node:
+        node.create_publisher("/robot/odom", Odometry, "latched")
+        node.create_publisher("/robot/scan", LaserScan, "best_effort")
+        node.create_publisher("/robot/tf", TFMessage, "reliable")
+        specs = discover_topics(["/robot/scan", "/robot/odom", "/robot/tf"], None, 30.0)
+    assert [(s.topic, s.msg_type, s.qos) for s in specs] == [
+        ("/robot/scan", LaserScan, "best_effort"), ("/robot/odom", Odometry, "latched"),
+        ("/robot/tf", TFMessage, "reliable")]
 
 
 def test_default_topics_match_the_issue_and_the_help_text() -> None:
