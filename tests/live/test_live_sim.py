@@ -5,7 +5,7 @@
 - the dashboard (`rbnx dashboard`) in headless Debian chromium: no console error, the canvas shows the
   map (dark pixels where /map has walls, light where it is free), a click on a free cell sends a goal,
   the drawn robot moves, the status line says SUCCEEDED, deactivate/activate of mapping via its buttons
-  changes the shown state. Screenshots are kept in tests/artifacts/ (dashboard.png, dashboard_navigating.png).
+  changes the shown state; a drag sets the goal's heading and the cancel button cancels it. Screenshots are kept in tests/artifacts/ (dashboard.png, dashboard_navigating.png).
 """
 
 from __future__ import annotations
@@ -257,6 +257,22 @@ def test_dashboard_in_headless_chromium(sim: dict[str, Any], dashboard: str) -> 
             page.click("#btn-activate-mapping")
             page.wait_for_selector("#state-mapping.state-active", timeout=60_000)
             assert page.inner_text("#error") == ""
+
+            # Drag sets the goal's heading (here: up the screen = +y = yaw pi/2); the cancel button cancels.
+            sx, sy = page.evaluate("window.__dash.worldToCanvas(3.5, 1.6)")
+            page.mouse.move(box["x"] + sx * scale, box["y"] + sy * scale)
+            page.mouse.down()
+            page.mouse.move(box["x"] + sx * scale, box["y"] + (sy - 60) * scale, steps=5)
+            page.mouse.up()
+            page.wait_for_function("document.getElementById('navstatus').textContent.match(/RUNNING/)",
+                                   timeout=60_000)
+            goal = page.evaluate("window.__dash.goal")
+            assert goal["yaw"] == pytest.approx(math.pi / 2, abs=0.05), goal
+            assert math.hypot(goal["x"] - 3.5, goal["y"] - 1.6) < 0.1, goal
+            page.click("#cancel")
+            page.wait_for_function("document.getElementById('navstatus').textContent.match(/CANCELED|SUCCEEDED|FAILED/)",
+                                   timeout=60_000)
+            assert page.inner_text("#navstatus").startswith("CANCELED"), page.inner_text("#navstatus")
         finally:
             browser.close()
     assert not problems, problems

@@ -16,7 +16,7 @@ let drawPending = false;
 
 // Read by the browser test and the latency benchmark.
 const dash = window.__dash = {
-  mapVersion: 0, mapMeta: null, messages: 0, drawnPose: null, drawLog: [],
+  mapVersion: 0, mapMeta: null, goal: null, messages: 0, drawnPose: null, drawLog: [],
   worldToCanvas: (x, y) => view ? [view.ox + (x - view.x0) * view.s, view.oy + (view.y1 - y) * view.s] : null,
   canvasToWorld: (cx, cy) => view ? [view.x0 + (cx - view.ox) / view.s, view.y1 - (cy - view.oy) / view.s] : null,
   // centre of grid cell (col, row) as in OccupancyGrid.data (row 0 = lowest y)
@@ -37,6 +37,7 @@ function connect() {
     if (snap.map && snap.map.version !== (mapMeta && mapMeta.version) && snap.map.version !== loadingVersion) {
       loadMap(snap.map);
     }
+    dash.goal = snap.goal;
     updatePanel();
     schedule();
   };
