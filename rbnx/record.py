@@ -31,8 +31,7 @@ _QOS_YAML = ("- history: 1\n  depth: {depth}\n  reliability: {rel}\n  durability
              "  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n"
              "  avoid_ros_namespace_conventions: false\n")
 
-
-BATCH_S = 0.1
+BATCH_S = 0.1  # seconds between passes over the readers (see McapRecorder._run)
 
 
 def qos_metadata(qos: str) -> str:
