@@ -38,6 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
         b.add_argument("--exit-after-boot", action="store_true",
                        help="return after boot, leaving packages running (stop with rbnx shutdown)")
         b.add_argument("--no-gateway", action="store_true", help="do not serve the deployment's MCP gateway")
+        b.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
+                       help="also serve the live dashboard on 127.0.0.1:PORT (default 8765)")
 
     s = sub.add_parser("shutdown", help="stop a running boot of a deploy file")
     deploy_arg(s)
@@ -102,9 +104,14 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
     mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
 
-    from rbnx import cmd_agents, cmd_demo
+    from rbnx import cmd_agents, cmd_demo, cmd_nav, record, replay
+    from rbnx.dashboard import cli as dashboard_cli
     cmd_agents.add_parser(sub)
     cmd_demo.add_parser(sub)
+    cmd_nav.add_parsers(sub)
+    record.add_parser(sub)
+    replay.add_parser(sub)
+    dashboard_cli.add_parser(sub)
     return p
 
 
@@ -119,6 +126,11 @@ def _dispatch(args: argparse.Namespace) -> int:
     if args.cmd == "demo":
         from rbnx import cmd_demo
         return cmd_demo.cmd_demo(args)
+    from rbnx import cmd_nav, record, replay
+    from rbnx.dashboard import cli as dashboard_cli
+
+    local |= {"navigate": cmd_nav.cmd_navigate, "nav-status": cmd_nav.cmd_nav_status, "cancel": cmd_nav.cmd_cancel,
+              "record": record.cmd_record, "replay": replay.cmd_replay, "dashboard": dashboard_cli.cmd_dashboard}
     if args.cmd in local:
         return local[args.cmd](args)
     remote = {"caps": cmd_query.cmd_caps, "contracts": cmd_query.cmd_contracts, "describe": cmd_query.cmd_describe,

@@ -24,6 +24,7 @@ from typing import Any
 from rbnx.demo_boot import BootChild, DemoError, pick_domain_id
 from rbnx.demo_goalrun import GoalRunner
 from rbnx.demo_goals import Goal, choose_goals, fmt_s
+from rbnx.demo_live import DemoLive
 from rbnx.demo_record import Recorder, render_map
 from rbnx.demo_report import GoalResult, LiveLine, print_table, write_json
 from rbnx.demo_rpc import DemoRpc
@@ -44,6 +45,9 @@ def add_parser(sub: Any) -> None:
     d.add_argument("--deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
     d.add_argument("--timeout-per-goal", type=float, default=180.0, help="wall seconds per goal (default 180)")
     d.add_argument("--boot-timeout", type=float, default=120.0, help="wall seconds to come up (default 120)")
+    d.add_argument("--record", action="store_true", help="record the run to OUT/run.mcap (MCAP, ROS 2 CDR)")
+    d.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
+                   help="serve the live dashboard on 127.0.0.1:PORT (default 8765)")
 
 
 # ---------------------------------------------------------------------- argument checks (exit 2)
@@ -93,6 +97,8 @@ def _check_args(args: argparse.Namespace) -> tuple[Path, str, Path]:
         v = getattr(args, name)
         if not (math.isfinite(v) and v > 0):
             raise UsageError(f"--{name.replace('_', '-')}: must be > 0, got {v}")
+    if args.dashboard is not None and not 0 <= args.dashboard <= 65535:
+        raise UsageError(f"--dashboard: port must be 0..65535, got {args.dashboard}")
     deploy = resolve_deploy(args.deploy)
     if not deploy.is_file():
         raise UsageError(f"deploy file {deploy} not found (pass --deploy)")
@@ -176,6 +182,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     code, t_start = 1, time.monotonic()
     rpc: DemoRpc | None = None
     rec: Recorder | None = None
+    live = DemoLive(args.record, args.dashboard, out, domain)
     with _Stop() as stop:
         stop.boot = boot
         try:
@@ -186,6 +193,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
                                      _wait_line(line, names, t_start))
             line.done(f"system up in {time.monotonic() - t_start:.1f}s: {', '.join(names)} ACTIVE, atlas {atlas}")
             summary["atlas"] = atlas
+            live.start(atlas, summary)
             rpc = DemoRpc(atlas)
             rec = Recorder(rpc, domain)
             rec.start()
@@ -212,6 +220,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             pass
         finally:
+            live.stop(summary)
             code = _finish(code, stop, boot, rpc, rec, results, goals, summary, out, t_start)
     return code
 

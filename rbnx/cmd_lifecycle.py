@@ -57,7 +57,23 @@ def cmd_boot(args: argparse.Namespace) -> int:
                        boot_timeout=args.boot_timeout, term_timeout=args.term_timeout,
                        progress=not args.no_progress, verbose=args.verbose, exit_after_boot=args.exit_after_boot,
                        gateway=not getattr(args, "no_gateway", False))
-    return run_boot(deploy, opts)
+    if getattr(args, "dashboard", None) is None:
+        return run_boot(deploy, opts)
+    from rbnx.dashboard.cli import atlas_of_deploy, check_port, start_background
+
+    if check_port(args.dashboard):
+        print(f"rbnx boot: {check_port(args.dashboard)}", file=sys.stderr)
+        return 2
+    try:  # the atlas address comes from the boot's state file once the atlas is up
+        dash = start_background(atlas_of_deploy(deploy.path), args.dashboard)
+    except OSError as exc:
+        print(f"rbnx boot: dashboard: {exc}", file=sys.stderr)
+        return 1
+    print(f"dashboard at {dash.url}", flush=True)
+    try:
+        return run_boot(deploy, opts)
+    finally:
+        dash.stop()
 
 
 # ------------------------------------------------------------------------------ shutdown

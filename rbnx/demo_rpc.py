@@ -117,10 +117,10 @@ class DemoRpc:
 
     # ------------------------------------------------------------------ navigation
 
-    def navigate(self, goal: Goal) -> tuple[bool, str, str]:
-        """(accepted, run_id, detail) for a goal in the map frame."""
+    def navigate(self, goal: Goal, frame: str = "map") -> tuple[bool, str, str]:
+        """(accepted, run_id, detail) for a goal in ``frame`` (the map frame unless told)."""
         req = navigation_pb2.Navigate_Request()
-        req.goal.header.frame_id = "map"
+        req.goal.header.frame_id = frame
         req.goal.pose.position.x, req.goal.pose.position.y = goal.x, goal.y
         req.goal.pose.orientation.z = math.sin(goal.yaw / 2)
         req.goal.pose.orientation.w = math.cos(goal.yaw / 2)
@@ -135,10 +135,15 @@ class DemoRpc:
     def cancel(self, run_id: str) -> None:
         """Best effort: used on timeout and Ctrl-C, where a failure must not hide the real reason."""
         try:
-            self._call(CANCEL, stubs.RobonixServiceNavigationNavigateCancelStub, "CancelNavigation",
-                       navigation_pb2.CancelNavigation_Request(run_id=run_id), timeout=3.0)
+            self.cancel_run(run_id)
         except DemoError:
             pass
+
+    def cancel_run(self, run_id: str) -> tuple[bool, str]:
+        """(accepted, detail) of CancelNavigation; an empty ``run_id`` means the latest run."""
+        r = self._call(CANCEL, stubs.RobonixServiceNavigationNavigateCancelStub, "CancelNavigation",
+                       navigation_pb2.CancelNavigation_Request(run_id=run_id), timeout=3.0)
+        return bool(r.accepted), r.detail
 
     # ------------------------------------------------------------------ map
 

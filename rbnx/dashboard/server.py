@@ -1,0 +1,146 @@
+"""The dashboard's web server: one page, a WebSocket of state snapshots, the map PNG, three actions.
+
+Routes: ``/`` the page (package data in ``static/``), ``/ws`` pushes a JSON snapshot whenever the state
+changed (at most every ``MIN_PUSH_S``) and at least every ``MAX_PUSH_S`` (≥ 5 Hz), ``/api/map.png`` the current
+map image (the page fetches it only when the map's version changed), ``POST /api/goal`` ``{x, y, yaw}``,
+``POST /api/cancel``, ``POST /api/lifecycle`` ``{provider, command}``. Binds 127.0.0.1 by default.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+from importlib import resources
+from typing import Any
+
+import uvicorn
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response
+from starlette.routing import Route, WebSocketRoute
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from rbnx.dashboard.state import DashboardError, LiveState
+
+MIN_PUSH_S = 0.04
+MAX_PUSH_S = 0.2  # >= 5 updates/s also when nothing moves (the page shows it is live)
+STATIC = {"/": ("index.html", "text/html; charset=utf-8"),
+          "/app.js": ("app.js", "text/javascript; charset=utf-8"),
+          "/style.css": ("style.css", "text/css; charset=utf-8")}
+
+
+def _static(name: str) -> bytes:
+    return resources.files("rbnx.dashboard").joinpath("static", name).read_bytes()
+
+
+def build_app(state: LiveState) -> Starlette:
+    pages = {path: (_static(name), mime) for path, (name, mime) in STATIC.items()}
+
+    async def page(request: Request) -> Response:
+        body, mime = pages[request.url.path]
+        return Response(body, media_type=mime, headers={"Cache-Control": "no-store"})
+
+    async def map_png(_request: Request) -> Response:
+        img = state.map_image()
+        if img is None:
+            return JSONResponse({"error": "no map yet"}, status_code=404)
+        return Response(img.png, media_type="image/png",
+                        headers={"Cache-Control": "no-store", "X-Map-Version": str(img.version)})
+
+    async def _body(request: Request) -> dict[str, Any]:
+        try:
+            body = await request.json()
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise DashboardError("body: must be a JSON object") from None
+        if not isinstance(body, dict):
+            raise DashboardError("body: must be a JSON object")
+        return body
+
+    def _action(fn: Any) -> Any:
+        async def handler(request: Request) -> Response:
+            try:
+                body = await _body(request)
+                result = await asyncio.to_thread(fn, body)
+            except DashboardError as exc:
+                return JSONResponse({"error": str(exc)}, status_code=400)
+            return JSONResponse(result)
+        return handler
+
+    def goal(body: dict[str, Any]) -> dict[str, Any]:
+        missing = [k for k in ("x", "y") if k not in body]
+        if missing:
+            raise DashboardError(f"{missing[0]}: required")
+        return state.send_goal(body["x"], body["y"], body.get("yaw", 0.0))
+
+    def lifecycle(body: dict[str, Any]) -> dict[str, Any]:
+        provider = body.get("provider")
+        if not isinstance(provider, str) or not provider:
+            raise DashboardError("provider: required (a provider id)")
+        return state.lifecycle(provider, str(body.get("command", "")))
+
+    async def ws(socket: WebSocket) -> None:
+        await socket.accept()
+        seen = -1
+        try:
+            while True:
+                # on every change (at most every MIN_PUSH_S), and at least every MAX_PUSH_S regardless
+                seen = await asyncio.to_thread(state.wait_change, seen, MAX_PUSH_S)
+                await socket.send_text(json.dumps(state.snapshot(), separators=(",", ":")))
+                await asyncio.sleep(MIN_PUSH_S)
+        except (WebSocketDisconnect, RuntimeError):
+            return
+
+    routes = [Route(p, page) for p in STATIC] + [
+        Route("/api/map.png", map_png),
+        Route("/api/goal", _action(goal), methods=["POST"]),
+        Route("/api/cancel", _action(lambda _b: state.cancel()), methods=["POST"]),
+        Route("/api/lifecycle", _action(lifecycle), methods=["POST"]),
+        WebSocketRoute("/ws", ws),
+    ]
+    return Starlette(routes=routes)
+
+
+class DashboardServer:
+    """LiveState + uvicorn; ``start()`` serves from a background thread (for boot/demo --dashboard),
+    `rbnx dashboard` waits on ``running()``."""
+
+    def __init__(self, state: LiveState, host: str = "127.0.0.1", port: int = 8765) -> None:
+        self.state = state
+        config = uvicorn.Config(build_app(state), host=host, port=port, log_level="warning",
+                                ws="websockets-sansio", lifespan="off")
+        self.server = uvicorn.Server(config)
+        self._thread: threading.Thread | None = None
+
+    @property
+    def url(self) -> str:
+        servers = getattr(self.server, "servers", None) or []
+        for srv in servers:
+            for sock in srv.sockets:
+                host, port = sock.getsockname()[:2]
+                return f"http://{host}:{port}/"
+        return f"http://{self.server.config.host}:{self.server.config.port}/"
+
+    def start(self, timeout: float = 10.0) -> str:
+        self.state.start()
+        self._thread = threading.Thread(target=self.server.run, name="dashboard-http", daemon=True)
+        self._thread.start()
+        ev = threading.Event()
+        while not self.server.started and self._thread.is_alive():
+            ev.wait(0.02)
+            timeout -= 0.02
+            if timeout <= 0:
+                break
+        if not self.server.started:
+            self.stop()
+            raise OSError(f"dashboard could not listen on {self.server.config.host}:{self.server.config.port}")
+        return self.url
+
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def stop(self) -> None:
+        self.server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(10.0)
+        self.state.close()

@@ -1,0 +1,203 @@
+"""`rbnx replay`: publish a recording on DDS with /clock, so our services run on it as on a live robot.
+
+Reads our MCAP recordings and ROS 2 bags (``.mcap``, ``.db3`` or a rosbag2 directory) with ``rosbags``;
+each message's CDR bytes are decoded with our IDL struct of the same ROS 2 type and published on the
+(remapped) topic with the QoS its usual writer offers. Timing follows the recording's log times scaled by
+``--rate``. Time base: when the recording has /clock (ours do: the sim's clock), /clock is replayed as
+recorded; otherwise /clock is published from the log times, so a service with ``use_sim_time`` follows
+a real robot's bag. ``--drop-tf CHILD`` removes transforms from /tf, e.g. ``--drop-tf odom`` so a fresh
+SLAM is not confused by the recorded run's own map->odom.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+CLOCK = "/clock"
+
+
+class ReplayError(ValueError):
+    """A recording or an argument we cannot replay; str() is one line."""
+
+
+def parse_remap(arg: str) -> tuple[str, str]:
+    """``/scan:=/robot/scan`` -> ('/scan', '/robot/scan')."""
+    src, sep, dst = arg.partition(":=")
+    if not sep or not src.strip() or not dst.strip():
+        raise ReplayError(f"--remap {arg!r}: expected FROM:=TO, e.g. /scan:=/front/scan")
+    return "/" + src.strip().lstrip("/"), "/" + dst.strip().lstrip("/")
+
+
+@dataclass
+class ReplayStats:
+    published: dict[str, int] = field(default_factory=dict)
+    skipped_types: dict[str, str] = field(default_factory=dict)  # topic -> ROS type we have no struct for
+    loops: int = 0
+    bag_s: float = 0.0
+
+    def summary(self) -> str:
+        parts = ", ".join(f"{t} {n}" for t, n in sorted(self.published.items()))
+        text = f"{sum(self.published.values())} messages over {self.bag_s:.1f} s of recording: {parts}"
+        if self.skipped_types:
+            text += "; not replayed (no message type): " + ", ".join(
+                f"{t} ({ty})" for t, ty in sorted(self.skipped_types.items()))
+        return text
+
+
+class Replayer:
+    """One recording, published on one DDS domain. ``run`` blocks until the end (or ``stop``)."""
+
+    def __init__(self, path: str | Path, *, rate: float = 1.0, loop: bool = False,
+                 remaps: dict[str, str] | None = None, topics: list[str] | None = None,
+                 drop_tf: list[str] | None = None, clock: bool = True, clock_hz: float = 100.0,
+                 delay_s: float = 1.0, domain_id: int | None = None) -> None:
+        self.path = Path(path)
+        if not self.path.exists():
+            raise ReplayError(f"{self.path}: no such file or directory")
+        if not self.path.is_dir() and self.path.suffix not in (".mcap", ".db3"):
+            raise ReplayError(f"{self.path}: not a recording (.mcap, .db3 or a rosbag2 directory)")
+        if not rate > 0:
+            raise ReplayError(f"--rate: must be > 0, got {rate}")
+        self.rate, self.loop, self.clock, self.delay_s = rate, loop, clock, delay_s
+        self.clock_period = 1.0 / clock_hz
+        self.remaps = remaps or {}
+        self.topics = {"/" + t.lstrip("/") for t in topics} if topics else None
+        self.drop_tf = {f.strip().lstrip("/") for f in drop_tf or []}
+        self.domain_id = domain_id
+        self.stats = ReplayStats()
+
+    def _open(self) -> Any:
+        from rosbags.rosbag2 import Reader
+
+        try:
+            reader = Reader(self.path)
+            reader.open()
+        except Exception as exc:  # noqa: BLE001 - rosbags raises several types for unreadable files
+            raise ReplayError(f"{self.path}: cannot read: {exc}") from None
+        return reader
+
+    def run(self, stop: threading.Event | None = None,
+            on_progress: Callable[[float, ReplayStats], None] | None = None) -> ReplayStats:
+        from rbnx.rosmsg import KNOWN, type_by_name
+        from robonix_api.dds import Clock, DdsNode, Time
+
+        stop = stop or threading.Event()
+        reader = self._open()
+        node = DdsNode(domain_id=self.domain_id, name="rbnx_replay")
+        try:
+            conns, pubs, types = [], {}, {}
+            for c in reader.connections:
+                if self.topics is not None and c.topic not in self.topics:
+                    continue
+                cls = type_by_name(c.msgtype)
+                if cls is None:
+                    self.stats.skipped_types[c.topic] = c.msgtype
+                    continue
+                out = self.remaps.get(c.topic, c.topic)
+                if out not in pubs:
+                    qos = KNOWN[c.topic].qos if c.topic in KNOWN else "reliable"
+                    pubs[out] = node.create_publisher(out, cls, qos, 1 if qos == "latched" else 100)
+                conns.append(c)
+                types[c.id] = (cls, out)
+            if not conns:
+                raise ReplayError(f"{self.path}: nothing to replay (no topic of a known type selected)")
+            recorded_clock = any(c.topic == CLOCK for c in conns)
+            clock_pub = None
+            if self.clock and not recorded_clock:
+                clock_pub = pubs.get(CLOCK) or node.create_publisher(CLOCK, Clock, "best_effort", 10)
+            stop.wait(self.delay_s)  # let subscribers discover the writers before the first message
+            t_first = reader.start_time
+            self.stats.bag_s = (reader.end_time - t_first) * 1e-9
+            while not stop.is_set():
+                t_wall0, last_clock = time.monotonic(), -1.0
+                for conn, ts, raw in reader.messages(connections=conns):
+                    rel = (ts - t_first) * 1e-9
+                    if not self._sleep_until(t_wall0 + rel / self.rate, stop):
+                        break
+                    cls, out = types[conn.id]
+                    if clock_pub is not None and rel - last_clock >= self.clock_period:
+                        clock_pub.publish(Clock(clock=Time(sec=ts // 1_000_000_000, nanosec=ts % 1_000_000_000)))
+                        last_clock = rel
+                    if not self.clock and conn.topic == CLOCK:
+                        continue
+                    msg = cls.deserialize(raw)
+                    if conn.topic == "/tf" and self.drop_tf:
+                        msg.transforms = [t for t in msg.transforms
+                                          if t.child_frame_id.strip().lstrip("/") not in self.drop_tf]
+                        if not msg.transforms:
+                            continue
+                    pubs[out].publish(msg)
+                    self.stats.published[out] = self.stats.published.get(out, 0) + 1
+                    if on_progress is not None:
+                        on_progress(rel, self.stats)
+                if not self.loop or stop.is_set():
+                    break
+                self.stats.loops += 1
+        finally:
+            node.close()
+            reader.close()
+        return self.stats
+
+    @staticmethod
+    def _sleep_until(t: float, stop: threading.Event) -> bool:
+        dt = t - time.monotonic()
+        if dt > 0:
+            return not stop.wait(dt)
+        return not stop.is_set()
+
+
+# ---------------------------------------------------------------------- CLI
+
+
+def add_parser(sub: Any) -> None:
+    r = sub.add_parser("replay", help="publish a recording (.mcap, .db3, rosbag2 dir) on DDS with /clock")
+    r.add_argument("file", help="recording: our .mcap, a ROS 2 bag (.mcap / .db3) or a rosbag2 directory")
+    r.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1.0)")
+    r.add_argument("--loop", action="store_true", help="start over at the end")
+    r.add_argument("--remap", action="append", default=[], metavar="FROM:=TO", help="topic remap (repeatable)")
+    r.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these recorded topics")
+    r.add_argument("--drop-tf", action="append", default=[], metavar="CHILD_FRAME",
+                   help="drop /tf transforms to this child frame (repeatable), e.g. odom")
+    r.add_argument("--no-clock", action="store_true", help="publish no /clock")
+    r.add_argument("--delay", type=float, default=1.0, help="seconds to wait for subscribers (default 1)")
+    r.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: the environment's)")
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    stop = threading.Event()
+    try:
+        remaps = dict(parse_remap(a) for a in args.remap)
+        if not args.delay >= 0:
+            raise ReplayError(f"--delay: must be >= 0, got {args.delay}")
+        rep = Replayer(args.file, rate=args.rate, loop=args.loop, remaps=remaps, topics=args.topics,
+                       drop_tf=args.drop_tf, clock=not args.no_clock, delay_s=args.delay,
+                       domain_id=args.domain_id)
+    except ReplayError as exc:
+        print(f"rbnx replay: {exc}", file=sys.stderr)
+        return 2
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    last = [0.0]
+
+    def progress(rel: float, st: ReplayStats) -> None:
+        if sys.stdout.isatty() and time.monotonic() - last[0] > 0.5:
+            last[0] = time.monotonic()
+            print(f"\r{rel:7.1f} / {st.bag_s:.1f} s  {sum(st.published.values())} messages", end="", flush=True)
+
+    try:
+        stats = rep.run(stop, progress)
+    except ReplayError as exc:
+        print(f"rbnx replay: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+    print(("\ninterrupted: " if stop.is_set() else "\n") + stats.summary(), flush=True)
+    return 130 if stop.is_set() else 0

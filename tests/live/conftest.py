@@ -1,0 +1,1 @@
+"""Live-system tests (real boot, browser): fixtures are in the test module."""
