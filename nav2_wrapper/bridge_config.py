@@ -13,8 +13,9 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from robonix_api.config_types import FrameName, OptionalTopicName
+from robonix_nav_data import resources
 
-PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
+PKG_ROOT = resources.data_root()  # the repository root (installed: robonix_nav_data): config/ lives here
 
 
 class BridgeConfigError(ValueError):

@@ -15,9 +15,10 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
+from robonix_nav_data import resources
 from slam_service.core import SlamConfig
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = resources.data_root()
 DEFAULT_ROBOT = "config/panda_mobile.yaml"
 
 
