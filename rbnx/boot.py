@@ -42,6 +42,7 @@ class BootOptions:
     progress: bool = True
     verbose: bool = False
     exit_after_boot: bool = False
+    parallel: bool = True  # start every entry at once; False: one at a time (next when settled or parked)
     timing: Timing = field(default_factory=Timing)
 
 
@@ -108,7 +109,14 @@ def start_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | Non
 
 
 class Orchestrator:
-    """Starts entries one at a time; an entry that answers Deferred is parked and retried meanwhile."""
+    """Starts the entries and drives each to its target state; an entry answering Deferred is retried.
+
+    By default every entry starts at once: rbnx does not know the dependencies between packages (they
+    resolve each other through the atlas), and a package whose input is not up yet answers Deferred and
+    is retried with backoff, so starting in parallel is always safe and overlaps the slow part of each
+    start (interpreter + imports, several seconds for MuJoCo/numba). ``parallel=False`` restores
+    one-at-a-time starts (the next entry starts when the current one settled or is parked).
+    """
 
     def __init__(self, entries: list[ResolvedEntry], env: dict[str, str], atlas_addr: str, opts: BootOptions,
                  stop: threading.Event, on_change: Any = None) -> None:
@@ -136,7 +144,7 @@ class Orchestrator:
         current: EntryRunner | None = None
         with Atlas(self.atlas_addr, timeout=2.0) as atlas:
             while not self.stop.is_set():
-                if (current is None or current.settled or current.parked) and queue:
+                while (current is None or current.settled or current.parked or self.opts.parallel) and queue:
                     current = queue.pop(0)
                     current.start(self.atlas_addr, atlas)
                     self.on_change()
@@ -216,7 +224,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     sig.install()
     procs.set_supervised(not opts.exit_after_boot)
     opts.log_dir.mkdir(parents=True, exist_ok=True)
-    spath = state_path(deploy.path)
+    spath = state_path(deploy.path, deploy.atlas_listen, pid=os.getpid())
     atlas_group: ProcGroup | None = None
     orch: Orchestrator | None = None
     state: dict[str, Any] = {"pid": os.getpid(), "deploy": str(deploy.path), "log_dir": str(opts.log_dir.resolve()),
@@ -245,7 +253,8 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         save()
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
-        orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
+        env = dict(deploy.env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
+        orch = Orchestrator(deploy.entries, env, atlas_addr, opts, sig.stop, on_change=save)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()
         if sig.stop.is_set():

@@ -37,6 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
         b.add_argument("--no-progress", action="store_true", help="no live progress view")
         b.add_argument("--exit-after-boot", action="store_true",
                        help="return after boot, leaving packages running (stop with rbnx shutdown)")
+        b.add_argument("--serial", action="store_true",
+                       help="start entries one at a time instead of all at once")
 
     s = sub.add_parser("shutdown", help="stop a running boot of a deploy file")
     deploy_arg(s)
@@ -101,18 +103,19 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
     mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
 
-    from rbnx import cmd_demo
+    from rbnx import cmd_demo, cmd_init
     cmd_demo.add_parser(sub)
+    cmd_init.add_parser(sub)
     return p
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    from rbnx import cmd_build, cmd_lifecycle, cmd_map, cmd_query, cmd_validate
+    from rbnx import cmd_build, cmd_init, cmd_lifecycle, cmd_map, cmd_query, cmd_validate
 
     local: dict[str, Callable[[argparse.Namespace], int]] = {
         "boot": cmd_lifecycle.cmd_boot, "deploy": cmd_lifecycle.cmd_boot, "shutdown": cmd_lifecycle.cmd_shutdown,
         "start": cmd_lifecycle.cmd_start, "logs": cmd_lifecycle.cmd_logs, "build": cmd_build.cmd_build,
-        "validate": cmd_validate.cmd_validate,
+        "validate": cmd_validate.cmd_validate, "init": cmd_init.cmd_init,
     }
     if args.cmd == "demo":
         from rbnx import cmd_demo

@@ -20,6 +20,14 @@ from rbnx.atlas_rpc import CMD, Atlas, AtlasError, Driver, DriverReply, driver_c
 from rbnx.backoff import Backoff
 from rbnx.models import ResolvedEntry
 from rbnx.procs import ProcGroup, proc_start_ticks, run_hook, spawn, tail
+from rbnx.statefile import run_dir
+
+
+def numba_cache_dir(env: dict[str, str]) -> Path:
+    """$XDG_CACHE_HOME/robonix-nav/numba (default ~/.cache/...): writable and kept between boots."""
+    base = env.get("XDG_CACHE_HOME") or os.path.join(env.get("HOME") or os.path.expanduser("~"), ".cache")
+    return Path(base) / "robonix-nav" / "numba"
+
 
 REGISTER_TIMEOUT_S = 60.0
 STOP_HOOK_TIMEOUT_S = 20.0
@@ -99,8 +107,13 @@ class EntryRunner:
             RBNX_DEPLOY_MANAGED="1",
             ROBONIX_ATLAS=atlas_addr,
             RBNX_PACKAGE_ROOT=str(self.entry.root),
+            # pidfiles etc. of this deployment only: another deployment's stop hook never sees them
+            RBNX_RUN_DIR=str(run_dir(env.get("RBNX_DEPLOY_NAME", ""), atlas_addr, env)),
             PYTHONUNBUFFERED="1",
         )
+        # numba compiles the planner kernels once into the user's cache, not next to installed sources
+        # (often read-only) where every boot would compile them again.
+        env.setdefault("NUMBA_CACHE_DIR", str(numba_cache_dir(env)))
         # Packages started by this rbnx use its environment's `python` unless PATH already has it.
         bindir = os.path.dirname(sys.executable)
         if bindir not in env.get("PATH", "").split(os.pathsep):
@@ -267,6 +280,7 @@ class EntryRunner:
         """For the state file."""
         p = self.proc
         return {"name": self.name, "kind": self.entry.kind, "state": self.state, "root": str(self.entry.root),
+                "run_dir": self.child_env(self._atlas_addr)["RBNX_RUN_DIR"] if self._atlas_addr else "",
                 "manifest": str(self.entry.manifest_path),
                 "pid": p.pid if p else None, "pgid": p.pgid if p else None,
                 "start_ticks": p.start_ticks if p else None, "extra_pids": [[x, proc_start_ticks(x)] for x in sorted(p.extra_pids)] if p else [],
