@@ -115,7 +115,7 @@ def _shutdown_orphans(st: dict[str, Any], term_timeout: float) -> None:
 def cmd_shutdown(args: argparse.Namespace) -> int:
     path = Path(args.file or DEFAULT_DEPLOY)
     try:
-        spath = locate_state(path)
+        spath = locate_state(path, getattr(args, "atlas", None))
     except StateNotFound as exc:
         print(f"rbnx shutdown: {exc}", file=sys.stderr)
         return 1
@@ -146,7 +146,7 @@ def cmd_shutdown(args: argparse.Namespace) -> int:
 def cmd_logs(args: argparse.Namespace) -> int:
     path = Path(args.file or DEFAULT_DEPLOY)
     try:
-        st = read_state(locate_state(path))
+        st = read_state(locate_state(path, getattr(args, "atlas", None)))
     except StateNotFound as exc:
         print(f"rbnx logs: {exc}", file=sys.stderr)
         return 1

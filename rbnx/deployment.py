@@ -24,14 +24,21 @@ def deploy_listen(path: Path) -> str:
         return ""
 
 
-def locate_state(path: Path) -> Path:
-    """The state file of the one running boot of ``path`` with the current environment's listen address."""
+def locate_state(path: Path, atlas: str | None = None) -> Path:
+    """The state file of the one running boot of ``path`` with the current environment's listen address.
+
+    Several boots of one file with an OS-picked port (``:0``) are told apart by ``atlas`` (the address
+    each boot reports); without it the choice is refused rather than guessed.
+    """
     listen = deploy_listen(path)
-    found = [p for p in find_states(path, listen) if read_state(p) is not None]
+    states = {p: read_state(p) for p in find_states(path, listen)}
+    found = [p for p, st in states.items() if st is not None]
+    if len(found) > 1 and atlas:
+        found = [p for p in found if (states[p] or {}).get("atlas") == atlas] or found
     if not found:
         where = f" with atlas {listen}" if listen else ""
         raise StateNotFound(f"no running boot recorded for {path}{where}")
     if len(found) > 1:
-        raise StateNotFound(f"{len(found)} boots of {path} with an OS-picked atlas port run; stop them by "
-                            "their state file (" + ", ".join(str(p) for p in found) + ") or give each a port")
+        addrs = ", ".join(str((states[p] or {}).get("atlas") or "?") for p in found)
+        raise StateNotFound(f"{len(found)} boots of {path} run (atlas {addrs}); pick one with --atlas ADDR")
     return found[0]

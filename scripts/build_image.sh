@@ -88,7 +88,10 @@ else
     --python-version 3.11 --implementation cp --platform "manylinux2014_$pyarch" \
     --platform "manylinux_2_28_$pyarch" --platform "manylinux_2_34_$pyarch" "$wheel"
 fi
-cp "$cache/wheelhouse-$arch"/*.whl "$cache/context/wheels/"
+# pip also drops the project's own wheel into the wheelhouse: keep only dependencies there, or a stale
+# copy of the project would overwrite the fresh one below.
+rm -f "$cache/wheelhouse-$arch"/robonix_nav-*.whl
+cp -n "$cache/wheelhouse-$arch"/*.whl "$cache/context/wheels/"
 cp "$root/constraints.txt" "$cache/context/"
 mkdir -p "$cache/context/docker"
 cp "$root"/docker/* "$cache/context/docker/"

@@ -12,55 +12,18 @@ import subprocess
 import time
 from pathlib import Path
 
-import grpc
 import pytest
 
 from robonix_api.atlas_client import AtlasClient
-from robonix_api.proto_gen import navigation_pb2, sim_pb2
-from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
 
-from .conftest import SIM_DEPLOY, alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
+from .conftest import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 
 ENTRIES = ("panda_mobile", "mapping", "nav2")
 KITCHEN_GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the start pose
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-
-
-def _grpc_endpoint(client: AtlasClient, contract: str) -> str:
-    cap = client.find_unique_capability(contract_id=contract, transport="grpc")
-    with client.connect_capability(consumer_id="e2e-test", provider_id=cap.provider_id, contract_id=contract,
-                                   transport="grpc") as ch:
-        return ch.endpoint.removeprefix("grpc://")
-
-
-def _navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
-    """Navigate over gRPC like any robonix consumer; returns (final state, detail, ground-truth xy)."""
-    with AtlasClient(atlas) as client:
-        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
-        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
-        gt_ep = _grpc_endpoint(client, "robonix/primitive/sim/ground_truth")
-    req = navigation_pb2.Navigate_Request()
-    req.goal.header.frame_id = "map"
-    req.goal.pose.position.x, req.goal.pose.position.y = x, y
-    req.goal.pose.orientation.w = 1.0
-    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch, \
-            grpc.insecure_channel(gt_ep) as gt_ch:
-        resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=10)
-        assert resp.accepted, resp.detail
-        status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)
-
-        def terminal() -> navigation_pb2.GetNavigationStatus_Response | None:
-            st = status.GetNavigationStatus(navigation_pb2.GetNavigationStatus_Request(run_id=resp.run_id),
-                                            timeout=5)
-            return st if st.state in ("SUCCEEDED", "FAILED", "CANCELED") else None
-
-        st = wait_until(terminal, timeout_s, f"goal {resp.run_id} to finish", 0.5)
-        gt = stubs.RobonixPrimitiveSimGroundTruthStub(gt_ch).GetGroundTruth(sim_pb2.GetGroundTruth_Request(),
-                                                                            timeout=5)
-    return st.state, st.detail, (gt.x, gt.y)
 
 
 def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: Path) -> None:
@@ -88,7 +51,7 @@ def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: P
             states = {p.id: p.state for p in client.query() if p.id in ENTRIES}
         assert states == dict.fromkeys(ENTRIES, LifecycleState.ACTIVE), states
 
-        state, detail, (gx, gy) = _navigate(atlas, *KITCHEN_GOAL, timeout_s=90)
+        state, detail, (gx, gy) = navigate(atlas, *KITCHEN_GOAL, timeout_s=90)
         assert state == "SUCCEEDED", detail
         assert math.hypot(gx - KITCHEN_GOAL[0], gy - KITCHEN_GOAL[1]) < 0.5, (gx, gy, detail)
 
