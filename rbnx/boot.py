@@ -149,8 +149,13 @@ class Orchestrator:
                     current.start(self.atlas_addr, atlas)
                     self.on_change()
                 now = time.monotonic()
+                before = [r.state for r in self.runners]
                 for r in self.runners:
                     r.step(atlas, now, deadline)
+                if [r.state for r in self.runners] != before:
+                    # progress (registered / inactive / active) may be what a parked entry waits for
+                    for r in self.runners:
+                        r.retry_now(now)
                 self._sync_view()
                 if not queue and all(r.settled for r in self.runners):
                     break

@@ -159,6 +159,11 @@ class EntryRunner:
             elif now >= self._next_retry:
                 self._send(self._retry_cmd)
 
+    def retry_now(self, now: float) -> None:
+        """Another entry made progress: a parked entry may be unblocked, so retry it without backoff."""
+        if self._phase == "deferred":
+            self._next_retry = min(self._next_retry, now)
+
     def _step_register(self, atlas: Atlas, now: float) -> None:
         if now >= self.started_at + self.timing.register_timeout:
             self._fail(f"no provider registered as {self.name!r} within {self.timing.register_timeout:g}s",

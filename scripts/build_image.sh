@@ -23,8 +23,7 @@ suite="${ROBONIX_BASE_SUITE:-bookworm}"
 base="${ROBONIX_BASE_IMAGE:-localhost/robonix-base:$suite-$arch}"
 cache="${RBNX_IMAGE_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/robonix-nav/image}"
 mkdir -p "$cache/debs" "$cache/wheelhouse-$arch"
-log="$cache/build.log"
-: > "$log"
+log="$(mktemp "${TMPDIR:-/tmp}/robonix-build-image.XXXXXX.log")"  # removed on success
 # Quiet unless a step fails; then its output ends up on stderr.
 step() { "$@" >>"$log" 2>&1 || { echo "build_image.sh: failed: $*" >&2; tail -30 "$log" >&2; exit 1; }; }
 
@@ -76,9 +75,11 @@ fi
 # The project's wheel and its pinned dependencies (constraints.txt), collected on the host so the
 # image build needs no network; pip's own cache makes a rebuild cheap.
 py="${PYTHON:-python3}"
-rm -rf "$cache/context"
-mkdir -p "$cache/context/wheels"
-wheel="$(PYTHON="$py" bash "$root/scripts/build_wheel.sh" "$cache/context/wheels" 2>>"$log")" \
+ctx="$(mktemp -d "${TMPDIR:-/tmp}/robonix-image-context.XXXXXX")"  # own folder: parallel builds never mix
+# shellcheck disable=SC2064  # expand now: remove this very directory
+trap "rm -rf '$ctx'" EXIT
+mkdir -p "$ctx/wheels"
+wheel="$(PYTHON="$py" bash "$root/scripts/build_wheel.sh" "$ctx/wheels" 2>>"$log")" \
   || { echo "build_image.sh: wheel build failed" >&2; tail -30 "$log" >&2; exit 1; }
 if [ "$arch" = "$host_arch" ]; then
   step "$py" -m pip wheel -q -c "$root/constraints.txt" -w "$cache/wheelhouse-$arch" "$wheel"
@@ -91,14 +92,15 @@ fi
 # pip also drops the project's own wheel into the wheelhouse: keep only dependencies there, or a stale
 # copy of the project would overwrite the fresh one below.
 rm -f "$cache/wheelhouse-$arch"/robonix_nav-*.whl
-cp -n "$cache/wheelhouse-$arch"/*.whl "$cache/context/wheels/"
-cp "$root/constraints.txt" "$cache/context/"
-mkdir -p "$cache/context/docker"
-cp "$root"/docker/* "$cache/context/docker/"
+cp -n "$cache/wheelhouse-$arch"/*.whl "$ctx/wheels/"
+cp "$root/constraints.txt" "$ctx/"
+mkdir -p "$ctx/docker"
+cp "$root"/docker/* "$ctx/docker/"
 stamp "wheel + wheelhouse"
 
 # docker format keeps the HEALTHCHECK (OCI images have none)
 fmt=(); [ "$engine" = podman ] && fmt=(--format docker)
 step "$engine" build "${fmt[@]}" --pull=never --network=none --platform "linux/$arch" -t "$image" \
-  --build-arg "BASE_IMAGE=$base" -f "$cache/context/docker/Dockerfile" "$cache/context"
+  --build-arg "BASE_IMAGE=$base" -f "$ctx/docker/Dockerfile" "$ctx"
 stamp "image $image"
+rm -f "$log"

@@ -13,8 +13,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-
-from tests.support.procs import wait_until
+from support.procs import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 SCRIPTS = REPO / "scripts"
