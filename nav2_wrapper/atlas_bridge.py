@@ -189,9 +189,11 @@ def build_provider(instance_id: str | None = None) -> NavProvider:
 
 
 def main() -> int:
+    from nav2_wrapper.core.warmup import compile_in_background
     from robonix_api.logsetup import setup_logging
 
     setup_logging("NAV_LOG_LEVEL")
+    compile_in_background()  # numba kernels compile/load while we register and wait for the map
     provider = build_provider()
     provider.svc.run()  # blocks until CMD_SHUTDOWN or SIGTERM/SIGINT; tears down cleanly
     return 0
