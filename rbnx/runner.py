@@ -47,10 +47,10 @@ def driver_timeout() -> float:
 class Timing:
     register_timeout: float = REGISTER_TIMEOUT_S
     driver_timeout: float = field(default_factory=driver_timeout)
-    # A Deferred retry is one cheap RPC; a short cap keeps a parked entry within 0.5 s of its input
+    # A Deferred retry is one cheap RPC; a short cap keeps a parked entry within 0.25 s of its input
     # appearing (that input's registration is not always a state change rbnx can see and react to).
     backoff_initial: float = 0.1
-    backoff_max: float = 0.5
+    backoff_max: float = 0.25
 
 
 @dataclass
