@@ -68,7 +68,7 @@ def test_image_runs_the_installed_wheel_as_non_root_with_a_warm_numba_cache(imag
 
 
 def test_demo_one_goal_inside_with_no_network(image: str) -> None:
-    r = _run(image, "rbnx", "demo", "--goals", "1", "--scene", "kitchen", "--rtf", "4",
+    r = _run(image, "rbnx", "demo", "--goals", "1", "--scene", "kitchen", "--rtf", "2",
              "--out", "/var/lib/robonix/demo")
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     assert "1/1 goals succeeded" in r.stdout

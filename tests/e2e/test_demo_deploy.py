@@ -1,7 +1,9 @@
 """Issue 7 acceptance, with real processes: `rbnx boot` of examples/sim/deploy.yaml (atlas + MuJoCo HAL +
 SLAM + navigation), one goal over gRPC → SUCCEEDED, SIGINT → every recorded process gone; and the
 one-command `rbnx demo` (exit 0, a real map.png, summary.json saying success; exit 130 and nothing left
-on Ctrl-C). The kitchen scene at a high real-time factor keeps each test well under two minutes."""
+on Ctrl-C). The kitchen scene keeps each test well under two minutes. The real-time factor stays at
+2: on a loaded 2-core machine the navigation process falls behind a faster clock (stale odometry,
+collisions at 6x), which is a limit of the machine, not what these tests check."""
 
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: Path) -> None:
-    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="4")
+    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2")
     out = tmp_path / "boot.out"
     t0 = time.monotonic()
     with open(out, "w") as fh:
@@ -80,7 +82,7 @@ def _run_demo(tmp_path: Path, *args: str, timeout: float = 240) -> subprocess.Co
 
 def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     out = tmp_path / "demo"
-    r = _run_demo(tmp_path, "--goals", "1", "--rtf", "6", "--scene", "kitchen", "--out", str(out))
+    r = _run_demo(tmp_path, "--goals", "1", "--rtf", "2", "--scene", "kitchen", "--out", str(out))
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     assert "1/1 goals succeeded" in r.stdout
 

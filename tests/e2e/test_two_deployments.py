@@ -36,7 +36,7 @@ class Deployment:
     def __init__(self, tmp: Path, name: str, domain: int) -> None:
         self.listen = f"127.0.0.1:{_free_port()}"
         shared = {"RBNX_STATE_DIR": str(tmp / "state"), "XDG_RUNTIME_DIR": str(tmp / "xdg")}
-        self.env = e2e_env(tmp, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="3", RBNX_ATLAS_LISTEN=self.listen,
+        self.env = e2e_env(tmp, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", RBNX_ATLAS_LISTEN=self.listen,
                            ROS_DOMAIN_ID=str(domain), **shared)
         self.env.pop("RBNX_RUN_DIR", None)
         self.out = tmp / f"{name}.out"

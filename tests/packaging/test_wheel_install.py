@@ -57,7 +57,7 @@ def test_demo_from_an_empty_directory(fresh_venv: Path, tmp_path: Path) -> None:
     empty = tmp_path / "empty"
     empty.mkdir()
     r = subprocess.run([str(fresh_venv / "bin" / "rbnx"), "demo", "--goals", "1", "--scene", "kitchen",
-                        "--rtf", "4"], cwd=empty, env=_clean_env(fresh_venv, tmp_path), capture_output=True,
+                        "--rtf", "2"], cwd=empty, env=_clean_env(fresh_venv, tmp_path), capture_output=True,
                        text=True, timeout=600, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     assert "1/1 goals succeeded" in r.stdout
