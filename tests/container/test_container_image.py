@@ -12,8 +12,10 @@ dir); the base rootfs and the image are rebuilt each time under tags of this tes
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -73,3 +75,46 @@ def test_demo_one_goal_inside_with_no_network(image: str) -> None:
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     assert "1/1 goals succeeded" in r.stdout
     assert "map /var/lib/robonix/demo/map.png" in r.stdout
+
+
+def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> None:
+    """The docker target as `rbnx boot` runs it: scripts/start.sh starts nav2 from the image (host network,
+    DDS config and domain forwarded) beside the host's atlas, HAL and SLAM; a goal succeeds; shutdown
+    removes the container (scripts/stop.sh)."""
+    sys.path.insert(0, str(REPO / "tests"))
+    from e2e.conftest import e2e_env, navigate, rbnx_cmd, wait_until
+
+    from robonix_nav_data import resources
+
+    (deploy,) = resources.copy_examples(tmp_path / "ex", ("sim",))
+    deploy.write_text(deploy.read_text().replace("ROBONIX_NAV2_FORCE: native", "ROBONIX_NAV2_FORCE: docker"))
+    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", ROBONIX_NAV2_IMAGE=image,
+                  ROBONIX_CONTAINER_ENGINE=ENGINE)
+    out = tmp_path / "boot.out"
+    with open(out, "w") as fh:
+        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--no-progress", "--log-dir",
+                                              str(tmp_path / "logs")], env=env, cwd=tmp_path, stdout=fh,
+                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+    try:
+        def booted() -> bool:
+            assert proc.poll() is None, out.read_text()
+            return "3/3 entries ready" in out.read_text()
+
+        wait_until(booted, 240, "the boot with nav2 in the container")
+        names = _engine("ps", "--format", "{{.Names}} {{.Image}}", timeout=60).stdout
+        assert "robonix-nav2-nav2-sim-navigation-" in names and image in names, names
+        (state,) = (tmp_path / "state").glob("boot-*.json")
+        state, detail, _ = navigate(json.loads(state.read_text())["atlas"], 5.8, 3.0, timeout_s=150)
+        assert state == "SUCCEEDED", detail
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(120) == 0, out.read_text()
+        left = _engine("ps", "-a", "--format", "{{.Names}}", timeout=60).stdout
+        assert "robonix-nav2-nav2-sim-navigation-" not in left, left
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(30)
