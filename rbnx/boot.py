@@ -82,25 +82,29 @@ def atlas_command(listen: str) -> list[str]:
     return [sys.executable, "-m", "atlas.server", "--listen", listen]
 
 
-def start_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> tuple[ProcGroup, str]:
-    """Start the atlas in its own group and wait for its ready line; returns (group, client address)."""
+def spawn_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> ProcGroup:
+    """Start the atlas in its own group (refused when its address is taken); see ``wait_atlas``."""
     if port_in_use(listen):
         raise BootError(f"atlas: something already listens on {client_addr(listen)}; stop it or change "
                         "system.atlas.listen")
     env = dict(env)
     if log and log.lower() in LOG_LEVELS:
         env.setdefault("ROBONIX_ATLAS_LOG", log.lower())
-    group = spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+    return spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+
+
+def wait_atlas(group: ProcGroup, log_path: Path) -> str:
+    """Wait for the atlas's ready line; returns the client address (BootError, atlas stopped, if none)."""
     deadline = time.monotonic() + ATLAS_READY_TIMEOUT_S
     while time.monotonic() < deadline:
         m = READY_RE.search(log_path.read_text(errors="replace")) if log_path.exists() else None
         if m:
-            return group, client_addr(m.group(1))
+            return client_addr(m.group(1))
         if not group.running():
             group.stop(2.0)
             last = " | ".join(tail(log_path, 5)) or "no output"
             raise BootError(f"atlas exited with code {group.popen.returncode} before it was ready: {last}")
-        time.sleep(0.05)
+        time.sleep(0.02)
     group.stop(5.0)
     raise BootError(f"atlas printed no 'atlas listening on' line within {ATLAS_READY_TIMEOUT_S:g}s")
 
@@ -138,9 +142,17 @@ class Orchestrator:
                 self.on_change()
         self.view.tick()
 
+    def start_all(self) -> None:
+        """Spawn every entry now, before the atlas is up (its address known in advance): the interpreter
+        start and imports of each package overlap the atlas's start; packages retry registering while
+        the atlas is not listening yet. A fresh atlas holds no stale records, so none is looked up."""
+        for r in self.runners:
+            r.start(self.atlas_addr, None)
+        self.on_change()
+
     def boot(self, deadline: float) -> bool:
         """Run until every entry settled, the boot deadline passed, or a stop was requested."""
-        queue = list(self.runners)
+        queue = [r for r in self.runners if r.proc is None and not r.settled]
         current: EntryRunner | None = None
         with Atlas(self.atlas_addr, timeout=2.0) as atlas:
             while not self.stop.is_set():
@@ -247,8 +259,13 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         t0 = time.monotonic()
         save()
         listen = deploy.atlas_listen
+        env = dict(deploy.env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
         try:
-            atlas_group, atlas_addr = start_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+            atlas_group = spawn_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+            if opts.parallel and _split(listen)[1] != 0:  # address known before the atlas is up
+                orch = Orchestrator(deploy.entries, env, client_addr(listen), opts, sig.stop, on_change=save)
+                orch.start_all()
+            atlas_addr = wait_atlas(atlas_group, opts.log_dir / "atlas.log")
         except BootError as exc:
             print(f"rbnx boot: {exc}", file=sys.stderr)
             return 1
@@ -258,8 +275,8 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         save()
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
-        env = dict(deploy.env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
-        orch = Orchestrator(deploy.entries, env, atlas_addr, opts, sig.stop, on_change=save)
+        if orch is None:
+            orch = Orchestrator(deploy.entries, env, atlas_addr, opts, sig.stop, on_change=save)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()
         if sig.stop.is_set():
