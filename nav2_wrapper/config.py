@@ -13,8 +13,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from robonix_api.config_types import FrameName, OptionalTopicName
 from robonix_api.validation import Seconds, field_errors, per_role
+from robonix_nav_data import resources
 
-PKG_ROOT = Path(__file__).resolve().parent.parent  # the repository root: config/ lives here
+PKG_ROOT = resources.data_root()  # the repository root (installed: robonix_nav_data): config/ lives here
 
 
 class ConfigError(ValueError):

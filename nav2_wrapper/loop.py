@@ -22,6 +22,7 @@ import numpy as np
 
 from nav2_wrapper.core import GoalRecord, Navigator
 from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
+from nav2_wrapper.core.warmup import ready as kernels_ready
 from robonix_api.dds import FrameNotFoundError, Path, TfError
 from robonix_api.dds.convert import header, pose_stamped, twist
 from robonix_api.geometry import compose
@@ -75,7 +76,7 @@ class NavLoop:
                 return
             self.nav.tick(self.inputs.clock.now(), st.pose, st.vel, grid)
             x, y, _ = st.pose
-            for dx, dy in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)):
+            for dx, dy in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)) if kernels_ready() else ():
                 if self.nav.planner.plan(self.nav.global_costmap, (x, y), (x + dx, y + dy)).ok:
                     break
             self.nav.path = np.zeros((0, 2))

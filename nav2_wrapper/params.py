@@ -16,6 +16,8 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from robonix_nav_data import resources
+
 from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
 from .core.controller import ControllerConfig
 from .core.costmap import CostmapConfig, ObservationSource
@@ -24,7 +26,7 @@ from .core.navigator import NavConfig, NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
 
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "config"
+CONFIG_DIR = resources.config_dir()
 PROFILES = ("sim", "slam", "default")
 TOKENS = ("__ROBONIX_MAP_TOPIC__", "__ROBONIX_ODOM_TOPIC__", "__ROBONIX_SCAN_TOPIC__", "__ROBONIX_FOOTPRINT__")
 _TOKEN_RE = re.compile(r"__ROBONIX_[A-Z0-9_]+__")

@@ -43,6 +43,7 @@ class BootOptions:
     verbose: bool = False
     exit_after_boot: bool = False
     gateway: bool = True  # serve the deployment's MCP gateway (not with exit_after_boot: it lives in rbnx)
+    parallel: bool = True  # start every entry at once; False: one at a time (next when settled or parked)
     timing: Timing = field(default_factory=Timing)
 
 
@@ -82,25 +83,29 @@ def atlas_command(listen: str) -> list[str]:
     return [sys.executable, "-m", "atlas.server", "--listen", listen]
 
 
-def start_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> tuple[ProcGroup, str]:
-    """Start the atlas in its own group and wait for its ready line; returns (group, client address)."""
+def spawn_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> ProcGroup:
+    """Start the atlas in its own group (refused when its address is taken); see ``wait_atlas``."""
     if port_in_use(listen):
         raise BootError(f"atlas: something already listens on {client_addr(listen)}; stop it or change "
                         "system.atlas.listen")
     env = dict(env)
     if log and log.lower() in LOG_LEVELS:
         env.setdefault("ROBONIX_ATLAS_LOG", log.lower())
-    group = spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+    return spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+
+
+def wait_atlas(group: ProcGroup, log_path: Path) -> str:
+    """Wait for the atlas's ready line; returns the client address (BootError, atlas stopped, if none)."""
     deadline = time.monotonic() + ATLAS_READY_TIMEOUT_S
     while time.monotonic() < deadline:
         m = READY_RE.search(log_path.read_text(errors="replace")) if log_path.exists() else None
         if m:
-            return group, client_addr(m.group(1))
+            return client_addr(m.group(1))
         if not group.running():
             group.stop(2.0)
             last = " | ".join(tail(log_path, 5)) or "no output"
             raise BootError(f"atlas exited with code {group.popen.returncode} before it was ready: {last}")
-        time.sleep(0.05)
+        time.sleep(0.02)
     group.stop(5.0)
     raise BootError(f"atlas printed no 'atlas listening on' line within {ATLAS_READY_TIMEOUT_S:g}s")
 
@@ -109,7 +114,14 @@ def start_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | Non
 
 
 class Orchestrator:
-    """Starts entries one at a time; an entry that answers Deferred is parked and retried meanwhile."""
+    """Starts the entries and drives each to its target state; an entry answering Deferred is retried.
+
+    By default every entry starts at once: rbnx does not know the dependencies between packages (they
+    resolve each other through the atlas), and a package whose input is not up yet answers Deferred and
+    is retried with backoff, so starting in parallel is always safe and overlaps the slow part of each
+    start (interpreter + imports, several seconds for MuJoCo/numba). ``parallel=False`` restores
+    one-at-a-time starts (the next entry starts when the current one settled or is parked).
+    """
 
     def __init__(self, entries: list[ResolvedEntry], env: dict[str, str], atlas_addr: str, opts: BootOptions,
                  stop: threading.Event, on_change: Any = None) -> None:
@@ -131,19 +143,32 @@ class Orchestrator:
                 self.on_change()
         self.view.tick()
 
+    def start_all(self) -> None:
+        """Spawn every entry now, before the atlas is up (its address known in advance): the interpreter
+        start and imports of each package overlap the atlas's start; packages retry registering while
+        the atlas is not listening yet. A fresh atlas holds no stale records, so none is looked up."""
+        for r in self.runners:
+            r.start(self.atlas_addr, None)
+        self.on_change()
+
     def boot(self, deadline: float) -> bool:
         """Run until every entry settled, the boot deadline passed, or a stop was requested."""
-        queue = list(self.runners)
+        queue = [r for r in self.runners if r.proc is None and not r.settled]
         current: EntryRunner | None = None
         with Atlas(self.atlas_addr, timeout=2.0) as atlas:
             while not self.stop.is_set():
-                if (current is None or current.settled or current.parked) and queue:
+                while (current is None or current.settled or current.parked or self.opts.parallel) and queue:
                     current = queue.pop(0)
                     current.start(self.atlas_addr, atlas)
                     self.on_change()
                 now = time.monotonic()
+                before = [r.state for r in self.runners]
                 for r in self.runners:
                     r.step(atlas, now, deadline)
+                if [r.state for r in self.runners] != before:
+                    # progress (registered / inactive / active) may be what a parked entry waits for
+                    for r in self.runners:
+                        r.retry_now(now)
                 self._sync_view()
                 if not queue and all(r.settled for r in self.runners):
                     break
@@ -217,7 +242,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     sig.install()
     procs.set_supervised(not opts.exit_after_boot)
     opts.log_dir.mkdir(parents=True, exist_ok=True)
-    spath = state_path(deploy.path)
+    spath = state_path(deploy.path, deploy.atlas_listen, pid=os.getpid())
     atlas_group: ProcGroup | None = None
     orch: Orchestrator | None = None
     gateway: Any = None
@@ -245,8 +270,13 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         t0 = time.monotonic()
         save()
         listen = deploy.atlas_listen
+        env = dict(deploy.env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
         try:
-            atlas_group, atlas_addr = start_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+            atlas_group = spawn_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+            if opts.parallel and _split(listen)[1] != 0:  # address known before the atlas is up
+                orch = Orchestrator(deploy.entries, env, client_addr(listen), opts, sig.stop, on_change=save)
+                orch.start_all()
+            atlas_addr = wait_atlas(atlas_group, opts.log_dir / "atlas.log")
         except BootError as exc:
             print(f"rbnx boot: {exc}", file=sys.stderr)
             return 1
@@ -256,7 +286,8 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         save()
         if opts.verbose:
             print(f"atlas listening on {atlas_addr} (pid {atlas_group.pid})", flush=True)
-        orch = Orchestrator(deploy.entries, deploy.env, atlas_addr, opts, sig.stop, on_change=save)
+        if orch is None:
+            orch = Orchestrator(deploy.entries, env, atlas_addr, opts, sig.stop, on_change=save)
         gateway = _start_gateway(orch, atlas_addr, opts, sig, gateway_ready)
         all_ok = orch.boot(deadline=t0 + opts.boot_timeout)
         save()

@@ -40,6 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
         b.add_argument("--no-gateway", action="store_true", help="do not serve the deployment's MCP gateway")
         b.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
                        help="also serve the live dashboard on 127.0.0.1:PORT (default 8765)")
+        b.add_argument("--serial", action="store_true",
+                       help="start entries one at a time instead of all at once")
 
     s = sub.add_parser("shutdown", help="stop a running boot of a deploy file")
     deploy_arg(s)
@@ -104,7 +106,7 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
     mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
 
-    from rbnx import cmd_agents, cmd_demo, cmd_nav, record, replay
+    from rbnx import cmd_agents, cmd_demo, cmd_init, cmd_nav, record, replay
     from rbnx.dashboard import cli as dashboard_cli
     cmd_agents.add_parser(sub)
     cmd_demo.add_parser(sub)
@@ -112,16 +114,18 @@ def build_parser() -> argparse.ArgumentParser:
     record.add_parser(sub)
     replay.add_parser(sub)
     dashboard_cli.add_parser(sub)
+    cmd_init.add_parser(sub)
     return p
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    from rbnx import cmd_agents, cmd_build, cmd_lifecycle, cmd_map, cmd_query, cmd_validate
+    from rbnx import cmd_agents, cmd_build, cmd_init, cmd_lifecycle, cmd_map, cmd_query, cmd_validate
 
     local: dict[str, Callable[[argparse.Namespace], int]] = {
         "boot": cmd_lifecycle.cmd_boot, "deploy": cmd_lifecycle.cmd_boot, "shutdown": cmd_lifecycle.cmd_shutdown,
         "start": cmd_lifecycle.cmd_start, "logs": cmd_lifecycle.cmd_logs, "build": cmd_build.cmd_build,
         "validate": cmd_validate.cmd_validate, "lifecycle": cmd_agents.cmd_lifecycle_verb,
+        "init": cmd_init.cmd_init,
     }
     if args.cmd == "demo":
         from rbnx import cmd_demo

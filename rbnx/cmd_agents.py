@@ -14,8 +14,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from rbnx.deployment import StateNotFound, locate_state
 from rbnx.models import DEFAULT_DEPLOY, ManifestProblems, load_deploy
-from rbnx.statefile import read_state, state_dir, state_path
+from rbnx.statefile import read_state, state_dir
 
 VERBS = ("status", "activate", "deactivate", "configure", "reset", "cleanup", "shutdown")
 
@@ -30,6 +31,7 @@ def add_parser(sub: Any) -> None:
                     help="configure: config change (repeatable; dotted keys, YAML values)")
     lc.add_argument("--patch", help="configure: a JSON merge patch of the entry's config")
     lc.add_argument("--json", action="store_true", help="print the result as JSON")
+    lc.add_argument("--atlas", help="which boot, when several of the deploy file run (their atlas address)")
 
 
 def gateways(atlas_addr: str | None = None) -> list[dict[str, str]]:
@@ -107,7 +109,11 @@ def _direct(st: dict[str, Any], tool: str, arguments: dict[str, Any]) -> tuple[b
 def cmd_lifecycle_verb(args: argparse.Namespace) -> int:
     path = Path(args.file or DEFAULT_DEPLOY)
     tool, arguments = _request(args)
-    st = read_state(state_path(path))
+    try:
+        st = read_state(locate_state(path, getattr(args, "atlas", None)))
+    except StateNotFound as exc:
+        print(f"rbnx lifecycle: {exc}", file=sys.stderr)
+        return 1
     if st is None or not st.get("atlas"):
         print(f"rbnx lifecycle: no running boot recorded for {path}", file=sys.stderr)
         return 1

@@ -28,9 +28,10 @@ from rbnx.demo_live import DemoLive
 from rbnx.demo_record import Recorder, render_map
 from rbnx.demo_report import GoalResult, LiveLine, print_table, write_json
 from rbnx.demo_rpc import DemoRpc
+from robonix_nav_data import resources
 
 DEFAULT_DEPLOY = Path("examples") / "sim" / "deploy.yaml"
-REPO_DEPLOY = Path(__file__).resolve().parents[1] / DEFAULT_DEPLOY
+REPO_DEPLOY = resources.example_deploy("sim")
 MIN_GOAL_DIST_M = 1.0
 
 

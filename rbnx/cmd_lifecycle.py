@@ -14,6 +14,7 @@ import yaml
 
 from rbnx.atlas_rpc import CMD, Atlas, AtlasError, Driver, driver_capability
 from rbnx.boot import BootOptions, Orchestrator, _Signals, run_boot
+from rbnx.deployment import StateNotFound, locate_state
 from rbnx.models import (
     DEFAULT_DEPLOY,
     ManifestProblems,
@@ -47,7 +48,7 @@ def cmd_boot(args: argparse.Namespace) -> int:
     deploy = load_deploy(path)  # ManifestProblems -> exit 2 in cli.main, nothing started
     for w in deploy.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    st = read_state(state_path(deploy.path))
+    st = read_state(state_path(deploy.path, deploy.atlas_listen))
     if st and (_boot_alive(st) or _recorded_alive(st)):
         who = f"rbnx pid {st['pid']}" if _boot_alive(st) else "a previous boot (its processes still run)"
         print(f"rbnx boot: {path} is already booted by {who}, atlas {st.get('atlas')}; "
@@ -56,7 +57,8 @@ def cmd_boot(args: argparse.Namespace) -> int:
     opts = BootOptions(log_dir=Path(args.log_dir) if args.log_dir else default_log_dir(),
                        boot_timeout=args.boot_timeout, term_timeout=args.term_timeout,
                        progress=not args.no_progress, verbose=args.verbose, exit_after_boot=args.exit_after_boot,
-                       gateway=not getattr(args, "no_gateway", False))
+                       gateway=not getattr(args, "no_gateway", False),
+                       parallel=not getattr(args, "serial", False))
     if getattr(args, "dashboard", None) is None:
         return run_boot(deploy, opts)
     from rbnx.dashboard.cli import atlas_of_deploy, check_port, start_background
@@ -115,6 +117,7 @@ def _shutdown_orphans(st: dict[str, Any], term_timeout: float) -> None:
             if pm.stop and pm.stop.strip():
                 env = dict(os.environ, RBNX_INSTANCE_NAME=name, RBNX_DEPLOY_MANAGED="1",
                            ROBONIX_ATLAS=st.get("atlas") or "", RBNX_PACKAGE_ROOT=str(root))
+                env.update({"RBNX_RUN_DIR": child["run_dir"]} if child.get("run_dir") else {})
                 run_hook(f"{name}-stop", pm.stop, root, env, Path(child["log"]), 20.0)
         except (ManifestProblems, KeyError, OSError):
             pass
@@ -128,7 +131,11 @@ def _shutdown_orphans(st: dict[str, Any], term_timeout: float) -> None:
 
 def cmd_shutdown(args: argparse.Namespace) -> int:
     path = Path(args.file or DEFAULT_DEPLOY)
-    spath = state_path(path)
+    try:
+        spath = locate_state(path, getattr(args, "atlas", None))
+    except StateNotFound as exc:
+        print(f"rbnx shutdown: {exc}", file=sys.stderr)
+        return 1
     st = read_state(spath)
     if st is None:
         print(f"rbnx shutdown: no running boot recorded for {path} ({spath})", file=sys.stderr)
@@ -155,7 +162,11 @@ def cmd_shutdown(args: argparse.Namespace) -> int:
 
 def cmd_logs(args: argparse.Namespace) -> int:
     path = Path(args.file or DEFAULT_DEPLOY)
-    st = read_state(state_path(path))
+    try:
+        st = read_state(locate_state(path, getattr(args, "atlas", None)))
+    except StateNotFound as exc:
+        print(f"rbnx logs: {exc}", file=sys.stderr)
+        return 1
     if st is None:
         print(f"rbnx logs: no running boot recorded for {path}", file=sys.stderr)
         return 1

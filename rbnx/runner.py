@@ -20,6 +20,14 @@ from rbnx.atlas_rpc import CMD, Atlas, AtlasError, Driver, DriverReply, driver_c
 from rbnx.backoff import Backoff
 from rbnx.models import ResolvedEntry
 from rbnx.procs import ProcGroup, proc_start_ticks, run_hook, spawn, tail
+from rbnx.statefile import run_dir
+
+
+def numba_cache_dir(env: dict[str, str]) -> Path:
+    """$XDG_CACHE_HOME/robonix-nav/numba (default ~/.cache/...): writable and kept between boots."""
+    base = env.get("XDG_CACHE_HOME") or os.path.join(env.get("HOME") or os.path.expanduser("~"), ".cache")
+    return Path(base) / "robonix-nav" / "numba"
+
 
 REGISTER_TIMEOUT_S = 60.0
 STOP_HOOK_TIMEOUT_S = 20.0
@@ -39,8 +47,10 @@ def driver_timeout() -> float:
 class Timing:
     register_timeout: float = REGISTER_TIMEOUT_S
     driver_timeout: float = field(default_factory=driver_timeout)
-    backoff_initial: float = 0.2
-    backoff_max: float = 2.0
+    # A Deferred retry is one cheap RPC; a short cap keeps a parked entry within 0.25 s of its input
+    # appearing (that input's registration is not always a state change rbnx can see and react to).
+    backoff_initial: float = 0.1
+    backoff_max: float = 0.25
 
 
 @dataclass
@@ -100,8 +110,13 @@ class EntryRunner:
             RBNX_DEPLOY_MANAGED="1",
             ROBONIX_ATLAS=atlas_addr,
             RBNX_PACKAGE_ROOT=str(self.entry.root),
+            # pidfiles etc. of this deployment only: another deployment's stop hook never sees them
+            RBNX_RUN_DIR=str(run_dir(env.get("RBNX_DEPLOY_NAME", ""), atlas_addr, env)),
             PYTHONUNBUFFERED="1",
         )
+        # numba compiles the planner kernels once into the user's cache, not next to installed sources
+        # (often read-only) where every boot would compile them again.
+        env.setdefault("NUMBA_CACHE_DIR", str(numba_cache_dir(env)))
         # Packages started by this rbnx use its environment's `python` unless PATH already has it.
         bindir = os.path.dirname(sys.executable)
         if bindir not in env.get("PATH", "").split(os.pathsep):
@@ -146,6 +161,11 @@ class EntryRunner:
                 self._fail(f"still deferred at the boot deadline: {self.detail or 'no reason given'}")
             elif now >= self._next_retry:
                 self._send(self._retry_cmd)
+
+    def retry_now(self, now: float) -> None:
+        """Another entry made progress: a parked entry may be unblocked, so retry it without backoff."""
+        if self._phase == "deferred":
+            self._next_retry = min(self._next_retry, now)
 
     def _step_register(self, atlas: Atlas, now: float) -> None:
         if now >= self.started_at + self.timing.register_timeout:
@@ -268,6 +288,7 @@ class EntryRunner:
         """For the state file."""
         p = self.proc
         return {"name": self.name, "kind": self.entry.kind, "state": self.state, "root": str(self.entry.root),
+                "run_dir": self.child_env(self._atlas_addr)["RBNX_RUN_DIR"] if self._atlas_addr else "",
                 "manifest": str(self.entry.manifest_path),
                 "pid": p.pid if p else None, "pgid": p.pgid if p else None,
                 "start_ticks": p.start_ticks if p else None, "extra_pids": [[x, proc_start_ticks(x)] for x in sorted(p.extra_pids)] if p else [],

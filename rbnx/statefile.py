@@ -1,8 +1,14 @@
-"""The boot state file: lets `rbnx shutdown -f deploy.yaml` find the booting rbnx and its children.
+"""The boot state file and the per-deployment run dir: what `rbnx shutdown -f deploy.yaml` finds.
 
-One file per deploy path under $RBNX_STATE_DIR, else $XDG_RUNTIME_DIR/rbnx, else /tmp/rbnx-<uid>; a copy
-lives in the log directory for post-mortems. PIDs are stored with their /proc start time so a reused
-PID is never signalled.
+A deployment is a deploy file booted against one atlas address: the same file may run twice on one host
+with different `system.atlas.listen` (and ROS domains), and the two must never see each other's files.
+So the state file is keyed by deploy path + configured atlas listen address (plus the boot's PID when
+the port is 0, i.e. picked by the OS), and the run dir handed to packages (RBNX_RUN_DIR: pidfiles of
+native starts) by deploy name + the atlas's actual address.
+
+State files live under $RBNX_STATE_DIR, else $XDG_RUNTIME_DIR/rbnx, else /tmp/rbnx-<uid>; a copy lives
+in the log directory for post-mortems. PIDs are stored with their /proc start time so a reused PID is
+never signalled.
 """
 
 from __future__ import annotations
@@ -10,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -23,9 +30,61 @@ def state_dir() -> Path:
     return Path(tempfile.gettempdir()) / f"rbnx-{os.getuid()}"
 
 
-def state_path(deploy_path: Path) -> Path:
-    digest = hashlib.sha1(str(Path(deploy_path).resolve()).encode()).hexdigest()[:12]
-    return state_dir() / f"boot-{Path(deploy_path).stem}-{digest}.json"
+def _digest(text: str, n: int) -> str:
+    return hashlib.sha1(text.encode()).hexdigest()[:n]
+
+
+def _port_is_zero(listen: str) -> bool:
+    return listen.rpartition(":")[2] == "0"
+
+
+def _state_stem(deploy_path: Path, listen: str) -> str:
+    path_key = _digest(str(Path(deploy_path).resolve()), 12)
+    return f"boot-{Path(deploy_path).stem}-{path_key}" + (f"-{_digest(listen, 8)}" if listen else "")
+
+
+def state_path(deploy_path: Path, listen: str = "", pid: int | None = None) -> Path:
+    """The state file of the deployment (deploy file, configured atlas listen address).
+
+    With an OS-picked port (``:0``) several boots of one file can run at once, so each adds its PID.
+    """
+    stem = _state_stem(deploy_path, listen)
+    if pid is not None and _port_is_zero(listen):
+        stem += f"-p{pid}"
+    return state_dir() / f"{stem}.json"
+
+
+def find_states(deploy_path: Path, listen: str = "") -> list[Path]:
+    """Existing state files of this deployment: the exact one, or the per-PID ones of a ``:0`` listen."""
+    exact = state_path(deploy_path, listen)
+    found = [exact] if exact.is_file() else []
+    if _port_is_zero(listen):
+        found += sorted(state_dir().glob(f"{exact.stem}-p*.json"))
+    return found
+
+
+def _safe(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_.-") or "x"
+
+
+def deployment_key(name: str, atlas_addr: str) -> str:
+    """A file-name-safe id of one running deployment: deploy name + the atlas address it serves."""
+    return f"{_safe(name)}-{_safe(atlas_addr)}"
+
+
+def run_dir(name: str, atlas_addr: str, env: dict[str, str] | None = None) -> Path:
+    """Where a deployment's packages keep runtime files (RBNX_RUN_DIR): one folder per deployment.
+
+    Base: $RBNX_RUN_DIR, else $XDG_RUNTIME_DIR/robonix, else <tmp>/robonix-<uid>.
+    """
+    env = os.environ if env is None else env
+    if env.get("RBNX_RUN_DIR"):
+        base = Path(env["RBNX_RUN_DIR"])
+    elif env.get("XDG_RUNTIME_DIR"):
+        base = Path(env["XDG_RUNTIME_DIR"]) / "robonix"
+    else:
+        base = Path(tempfile.gettempdir()) / f"robonix-{os.getuid()}"
+    return base / deployment_key(name, atlas_addr)
 
 
 def write_state(path: Path, data: dict[str, Any], copy_to: Path | None = None) -> None:

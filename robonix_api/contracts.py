@@ -11,6 +11,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from robonix_nav_data import resources
+
 MODES = (
     "rpc",
     "topic_out",
@@ -22,7 +24,7 @@ MODES = (
 KINDS = ("primitive", "service", "skill")
 
 #: The catalogue shipped with this project (``atlas/contracts``).
-BUILTIN_ROOT = Path(__file__).resolve().parent.parent / "atlas" / "contracts"
+BUILTIN_ROOT = resources.contracts_root()
 
 
 class ContractError(ValueError):

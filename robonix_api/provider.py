@@ -88,6 +88,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._procs = ProcessGroups()
         self._stop = threading.Event()
         self._stop_reason = ""
+        self._signalled = 0  # set by the signal handler (which must take no lock), acted on by run()
         self._ready = threading.Event()
         self._done = threading.Event()
         self._run_error: BaseException | None = None
@@ -435,6 +436,9 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                 self._ready.set()
                 raise
             while not (self._stop.is_set() or self.lifecycle.terminated.is_set()):
+                if self._signalled:
+                    self._stop_reason = self._stop_reason or f"signal {signal.Signals(self._signalled).name}"
+                    break
                 self._stop.wait(0.5)
         finally:
             try:
@@ -484,8 +488,10 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
             return {}
 
         def on_signal(signum: int, _frame: Any) -> None:
-            self._stop_reason = self._stop_reason or f"signal {signal.Signals(signum).name}"
-            self._stop.set()
+            # No lock here: the handler runs on the main thread, which may be holding _stop's condition
+            # lock inside _stop.wait() right then; _stop.set() would deadlock (a SIGTERMed provider that
+            # never exits). run() sees the flag within its 0.5 s poll.
+            self._signalled = signum
 
         return {sig: signal.signal(sig, on_signal) for sig in (signal.SIGTERM, signal.SIGINT)}
 

@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
 # Build the navigation package for a target (robonix convention): RBNX_BUILD_TARGET selects
-#   x86-docker (default) | jetson-docker -> the robonix-nav2 image from docker/Dockerfile
+#   x86-docker (default) | jetson-docker -> the robonix-nav2 image (scripts/build_image.sh: local base
+#                                           rootfs + docker/Dockerfile, no registry; arm64 for jetson)
 #   jetson-native                        -> check/install the Python package on the host (no ROS needed)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 target="${RBNX_BUILD_TARGET:-x86-docker}"
 image="${ROBONIX_NAV2_IMAGE:-robonix-nav2}"
+builder="${RBNX_IMAGE_BUILDER:-$root/scripts/build_image.sh}"  # the one recipe for the image (no registry)
 
 case "$target" in
   x86-docker)
-    docker build -t "$image" -f docker/Dockerfile .
+    ROBONIX_NAV2_IMAGE="$image" ROBONIX_IMAGE_ARCH=amd64 bash "$builder"
     ;;
   jetson-docker)
-    docker build --platform linux/arm64 -t "$image" -f docker/Dockerfile .
+    ROBONIX_NAV2_IMAGE="$image" ROBONIX_IMAGE_ARCH=arm64 bash "$builder"
     ;;
   jetson-native)
     py="${PYTHON:-python3}"

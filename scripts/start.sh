@@ -3,6 +3,8 @@
 # Mode: ROBONIX_NAV2_FORCE=native|docker wins; else native when ROBONIX_NAV2_PLATFORM=jetson_orin; else docker.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
+# shellcheck disable=SC1091  # common.sh is checked on its own
+. "$root/scripts/common.sh"
 force="${ROBONIX_NAV2_FORCE:-}"
 case "$force" in
   native|docker) mode="$force" ;;
@@ -18,7 +20,7 @@ if [ "$mode" = "native" ]; then
 fi
 
 image="${ROBONIX_NAV2_IMAGE:-robonix-nav2}"
-name="${ROBONIX_NAV2_CONTAINER:-robonix-nav2-${RBNX_INSTANCE_NAME:-nav2}}"
+name="$(rbnx_container_name)"
 # Forward what the provider needs, including what robonix forgets (instance name, deploy-managed).
 fwd=()
 for var in RBNX_INSTANCE_NAME RBNX_DEPLOY_MANAGED ROBONIX_ATLAS ROBONIX_PROVIDER_BIND_HOST \
@@ -31,5 +33,6 @@ if [[ "${CYCLONEDDS_URI:-}" == file://* ]]; then
   cfg="${CYCLONEDDS_URI#file://}"
   mounts+=(-v "$cfg:$cfg:ro")
 fi
-exec docker run --rm --name "$name" --network host --ipc=host "${fwd[@]}" "${mounts[@]}" \
+# The image is built locally (scripts/build_image.sh): never try a registry.
+exec "$(rbnx_engine)" run --rm --pull=never --name "$name" --network host --ipc=host "${fwd[@]}" "${mounts[@]}" \
   "$image" python -m nav2_wrapper.atlas_bridge

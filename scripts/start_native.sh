@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Run the navigation provider on the host: the installed Python package, no ROS install needed.
-# Records its PID so stop.sh can stop exactly this process.
+# Records its PID (with its start time) in this deployment's run dir so stop.sh stops exactly it.
 set -euo pipefail
-run_dir="${RBNX_RUN_DIR:-${XDG_RUNTIME_DIR:-/tmp}/robonix}"
-mkdir -p "$run_dir"
-echo "$$" > "$run_dir/nav2-${RBNX_INSTANCE_NAME:-nav2}.pid"
+# shellcheck disable=SC1091  # common.sh is checked on its own
+. "$(dirname "$0")/common.sh"
+pidfile="$(rbnx_pidfile)"
+mkdir -p "$(dirname "$pidfile")"
+echo "$$ $(rbnx_start_ticks $$)" > "$pidfile"
 exec "${PYTHON:-python3}" -m nav2_wrapper.atlas_bridge

@@ -16,9 +16,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
 from robonix_api.validation import Seconds, field_errors, per_role
+from robonix_nav_data import resources
 from slam_service.core import SlamConfig
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = resources.data_root()
 DEFAULT_ROBOT = "config/panda_mobile.yaml"
 
 

@@ -13,9 +13,11 @@ from typing import Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from robonix_nav_data import resources
+
 from .errors import SimConfigError, config_error
 
-DEFAULT_ROBOT_YAML = Path(__file__).resolve().parents[2] / "config" / "panda_mobile.yaml"
+DEFAULT_ROBOT_YAML = resources.robot_description()
 
 
 class _Model(BaseModel):

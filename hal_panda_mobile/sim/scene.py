@@ -17,11 +17,13 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from robonix_nav_data import resources
+
 from .errors import SimConfigError, config_error
 from .robot import RobotDescription, load_robot_description
 from .shapes import Circle, Rect, Shape, convex_hull, polygon_distance
 
-SCENES_DIR = Path(__file__).resolve().parent.parent / "scenes"
+SCENES_DIR = resources.scenes_dir()
 
 XY = tuple[float, float]
 

@@ -11,7 +11,9 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-ROBOT_YAML = Path(__file__).resolve().parents[2] / "config" / "panda_mobile.yaml"
+from robonix_nav_data import resources
+
+ROBOT_YAML = resources.robot_description()
 
 
 def _seg_dist(px: float, py: float, a: NDArray, b: NDArray) -> float:

@@ -23,10 +23,16 @@ def add_parser(sub: Any) -> None:
 
 def atlas_of_deploy(deploy: Path) -> Callable[[], str | None]:
     """The atlas address of a (possibly still starting) `rbnx boot` of ``deploy``, read from its state file."""
-    from rbnx.statefile import read_state, state_path
+    from rbnx.deployment import StateNotFound, locate_state
+    from rbnx.statefile import read_state
 
-    path = state_path(deploy)
-    return lambda: (read_state(path) or {}).get("atlas")
+    def atlas() -> str | None:
+        try:
+            return (read_state(locate_state(deploy)) or {}).get("atlas")
+        except StateNotFound:  # not written yet: the boot is still starting
+            return None
+
+    return atlas
 
 
 def check_port(port: int) -> str | None:

@@ -13,7 +13,9 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import unquote, urlparse
 
-DEFAULT_CONFIG = Path(__file__).resolve().parents[2] / "config" / "cyclonedds_loopback.xml"
+from robonix_nav_data import resources
+
+DEFAULT_CONFIG = resources.config_file("cyclonedds_loopback.xml")
 MAX_DOMAIN_ID = 232  # highest id Cyclone's default port mapping supports
 
 

@@ -7,7 +7,12 @@ import os
 import sys
 from pathlib import Path
 
-from support.procs import wait_until  # noqa: F401  (re-exported for the e2e tests)
+import grpc
+from support.procs import wait_until
+
+from robonix_api.atlas_client import AtlasClient
+from robonix_api.proto_gen import navigation_pb2, sim_pb2
+from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 
 REPO = Path(__file__).resolve().parents[2]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
@@ -59,3 +64,37 @@ def recorded_pids(state_file: Path) -> list[tuple[str, int, int | None]]:
         out.append((c["name"], int(c["pid"]), c.get("start_ticks")))
         out.extend((c["name"], int(p), t) for p, t in c.get("extra_pids") or [])
     return out
+
+
+def _grpc_endpoint(client: AtlasClient, contract: str) -> str:
+    cap = client.find_unique_capability(contract_id=contract, transport="grpc")
+    with client.connect_capability(consumer_id="e2e-test", provider_id=cap.provider_id, contract_id=contract,
+                                   transport="grpc") as ch:
+        return ch.endpoint.removeprefix("grpc://")
+
+
+def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
+    """Navigate over gRPC like any robonix consumer; returns (final state, detail, ground-truth xy)."""
+    with AtlasClient(atlas) as client:
+        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
+        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
+        gt_ep = _grpc_endpoint(client, "robonix/primitive/sim/ground_truth")
+    req = navigation_pb2.Navigate_Request()
+    req.goal.header.frame_id = "map"
+    req.goal.pose.position.x, req.goal.pose.position.y = x, y
+    req.goal.pose.orientation.w = 1.0
+    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch, \
+            grpc.insecure_channel(gt_ep) as gt_ch:
+        resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=10)
+        assert resp.accepted, resp.detail
+        status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)
+
+        def terminal() -> navigation_pb2.GetNavigationStatus_Response | None:
+            st = status.GetNavigationStatus(navigation_pb2.GetNavigationStatus_Request(run_id=resp.run_id),
+                                            timeout=5)
+            return st if st.state in ("SUCCEEDED", "FAILED", "CANCELED") else None
+
+        st = wait_until(terminal, timeout_s, f"goal {resp.run_id} to finish", 0.5)
+        gt = stubs.RobonixPrimitiveSimGroundTruthStub(gt_ch).GetGroundTruth(sim_pb2.GetGroundTruth_Request(),
+                                                                            timeout=5)
+    return st.state, st.detail, (gt.x, gt.y)

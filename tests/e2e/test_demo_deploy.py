@@ -1,7 +1,9 @@
 """Issue 7 acceptance, with real processes: `rbnx boot` of examples/sim/deploy.yaml (atlas + MuJoCo HAL +
 SLAM + navigation), one goal over gRPC → SUCCEEDED, SIGINT → every recorded process gone; and the
 one-command `rbnx demo` (exit 0, a real map.png, summary.json saying success; exit 130 and nothing left
-on Ctrl-C). The kitchen scene at a high real-time factor keeps each test well under two minutes."""
+on Ctrl-C). The kitchen scene keeps each test well under two minutes. The real-time factor stays at
+2: on a loaded 2-core machine the navigation process falls behind a faster clock (stale odometry,
+collisions at 6x), which is a limit of the machine, not what these tests check."""
 
 from __future__ import annotations
 
@@ -12,15 +14,12 @@ import subprocess
 import time
 from pathlib import Path
 
-import grpc
 import pytest
 
 from robonix_api.atlas_client import AtlasClient
-from robonix_api.proto_gen import navigation_pb2, sim_pb2
-from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
 
-from .conftest import SIM_DEPLOY, alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
+from .conftest import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 
@@ -29,42 +28,8 @@ KITCHEN_GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-def _grpc_endpoint(client: AtlasClient, contract: str) -> str:
-    cap = client.find_unique_capability(contract_id=contract, transport="grpc")
-    with client.connect_capability(consumer_id="e2e-test", provider_id=cap.provider_id, contract_id=contract,
-                                   transport="grpc") as ch:
-        return ch.endpoint.removeprefix("grpc://")
-
-
-def _navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
-    """Navigate over gRPC like any robonix consumer; returns (final state, detail, ground-truth xy)."""
-    with AtlasClient(atlas) as client:
-        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
-        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
-        gt_ep = _grpc_endpoint(client, "robonix/primitive/sim/ground_truth")
-    req = navigation_pb2.Navigate_Request()
-    req.goal.header.frame_id = "map"
-    req.goal.pose.position.x, req.goal.pose.position.y = x, y
-    req.goal.pose.orientation.w = 1.0
-    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch, \
-            grpc.insecure_channel(gt_ep) as gt_ch:
-        resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=10)
-        assert resp.accepted, resp.detail
-        status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)
-
-        def terminal() -> navigation_pb2.GetNavigationStatus_Response | None:
-            st = status.GetNavigationStatus(navigation_pb2.GetNavigationStatus_Request(run_id=resp.run_id),
-                                            timeout=5)
-            return st if st.state in ("SUCCEEDED", "FAILED", "CANCELED") else None
-
-        st = wait_until(terminal, timeout_s, f"goal {resp.run_id} to finish", 0.5)
-        gt = stubs.RobonixPrimitiveSimGroundTruthStub(gt_ch).GetGroundTruth(sim_pb2.GetGroundTruth_Request(),
-                                                                            timeout=5)
-    return st.state, st.detail, (gt.x, gt.y)
-
-
 def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: Path) -> None:
-    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="4")
+    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2")
     out = tmp_path / "boot.out"
     t0 = time.monotonic()
     with open(out, "w") as fh:
@@ -88,7 +53,7 @@ def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: P
             states = {p.id: p.state for p in client.query() if p.id in ENTRIES}
         assert states == dict.fromkeys(ENTRIES, LifecycleState.ACTIVE), states
 
-        state, detail, (gx, gy) = _navigate(atlas, *KITCHEN_GOAL, timeout_s=90)
+        state, detail, (gx, gy) = navigate(atlas, *KITCHEN_GOAL, timeout_s=90)
         assert state == "SUCCEEDED", detail
         assert math.hypot(gx - KITCHEN_GOAL[0], gy - KITCHEN_GOAL[1]) < 0.5, (gx, gy, detail)
 
@@ -117,7 +82,7 @@ def _run_demo(tmp_path: Path, *args: str, timeout: float = 240) -> subprocess.Co
 
 def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     out = tmp_path / "demo"
-    r = _run_demo(tmp_path, "--goals", "1", "--rtf", "6", "--scene", "kitchen", "--out", str(out))
+    r = _run_demo(tmp_path, "--goals", "1", "--rtf", "2", "--scene", "kitchen", "--out", str(out))
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     assert "1/1 goals succeeded" in r.stdout
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 from support.boot import RbnxBoot
-from support.procs import REPO
+from support.procs import REPO, wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.dds import DdsNode, LaserScan
@@ -44,9 +44,15 @@ def test_rbnx_boot_hal_only_and_sigint_leaves_nothing(tmp_path: Path) -> None:
         with AtlasClient(st["atlas"]) as client:
             (prov,) = client.query(id="sim_base")
             assert prov.state == LifecycleState.ACTIVE
-            contracts = {c.contract_id for c in prov.capabilities}
-            assert {"robonix/primitive/chassis/odom", "robonix/primitive/chassis/twist_in",
-                    "robonix/primitive/lidar/lidar", "robonix/primitive/sim/teleport"} <= contracts
+
+            def contracts() -> set[str]:
+                (p,) = client.query(id="sim_base")
+                return {c.contract_id for c in p.capabilities}
+
+            # declared right after ACTIVATE answers: wait for them rather than sample once
+            wanted = {"robonix/primitive/chassis/odom", "robonix/primitive/chassis/twist_in",
+                      "robonix/primitive/lidar/lidar", "robonix/primitive/sim/teleport"}
+            wait_until(lambda: wanted <= contracts(), 60, lambda: f"{sorted(wanted)} declared (has {sorted(contracts())})")
         with DdsNode(name="boot_test") as node:
             scan = node.wait_for_message("/scan", LaserScan, 60, "best_effort")
             assert scan is not None and len(scan.ranges) == 360

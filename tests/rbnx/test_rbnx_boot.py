@@ -71,7 +71,8 @@ def minimal(tmp_path: Path) -> tuple[Path, dict[str, str]]:
 
 def test_boot_defers_retries_caps_and_sigint_leaves_nothing(tmp_path: Path, minimal: tuple[Path, dict]) -> None:
     deploy, env = minimal
-    boot = Boot(tmp_path, deploy, env)
+    # --serial: B starts alone, so it must answer Deferred (in parallel A may already be up when B asks)
+    boot = Boot(tmp_path, deploy, env, "--serial")
     try:
         boot.wait_text(SUMMARY)
         out = boot.text()
@@ -145,6 +146,11 @@ def test_sigkill_of_the_boot_leaves_nothing_behind(tmp_path: Path, minimal: tupl
 
 def test_exit_after_boot_then_shutdown_from_state_file(tmp_path: Path, minimal: tuple[Path, dict]) -> None:
     deploy, env = minimal
+    # A fixed port: the deployment is (file, atlas address), so a second boot of it must be refused.
+    # (With port 0 every boot is a deployment of its own.)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        env = dict(env, RBNX_ATLAS_LISTEN=f"127.0.0.1:{s.getsockname()[1]}")
     res = run(["boot", "-f", str(deploy), "--log-dir", str(tmp_path / "logs"), "--no-progress",
                "--exit-after-boot"], env, tmp_path, timeout=240)
     st = json.loads(next((tmp_path / "state").glob("boot-*.json")).read_text())

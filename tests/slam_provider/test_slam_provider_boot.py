@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 import yaml
 from support.boot import RbnxBoot
-from support.procs import REPO
+from support.procs import REPO, wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.dds import DdsNode, OccupancyGrid, TfBuffer
@@ -44,7 +44,14 @@ def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
         with AtlasClient(st["atlas"]) as client:
             (prov,) = client.query(id="mapping")
             assert prov.state == LifecycleState.ACTIVE
-            assert "robonix/service/map/occupancy_grid" in {c.contract_id for c in prov.capabilities}
+
+            def declared() -> set[str]:
+                (p,) = client.query(id="mapping")
+                return {c.contract_id for c in p.capabilities}
+
+            # the provider declares its outputs right after ACTIVATE answers: wait for it, not a timing
+            wait_until(lambda: "robonix/service/map/occupancy_grid" in declared(), 60,
+                       lambda: f"occupancy_grid declared by mapping (has {sorted(declared())})")
         with DdsNode(name="slam_boot_test") as node:
             tf = TfBuffer(node)
             try:

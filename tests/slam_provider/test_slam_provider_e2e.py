@@ -271,10 +271,13 @@ def test_unwritable_map_dir_and_reset(env: Env, tmp_path: Path) -> None:
     assert env.slam.driver(DEACTIVATE) == (True, "inactive", "")
     assert env.slam.driver(INIT, {"map_dir": str(blocker / "maps")}) == (True, "inactive", "")
     assert env.slam.driver(ACTIVATE) == (True, "active", "")
-    env.drive(0.2, 0.0, 0.0, 1.0)
-    wait_until(lambda: env.stats()["engine"]["scans_integrated"] > 0, 60, "mapping after re-INIT")
+    env.drive(0.2, 0.0, 0.0, 2.0)  # 0.4 m: the first scan plus at least one gated-in scan (0.2 m travel)
+    wait_until(lambda: env.stats()["engine"]["scans_integrated"] >= 2, 60, "mapping after re-INIT")
     r = env.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="room2"), timeout=30)
     assert not r.ok and str(blocker) in r.detail and "directory" in r.detail.lower(), r.detail
     r2 = env.rpc("reset_map").ResetMap(map_pb2.ResetMap_Request(), timeout=30)
     assert r2.ok
-    assert env.stats()["engine"]["scans_integrated"] == 0
+    # Not "== 0": scans keep arriving, and the first one after a reset always starts the new map. The
+    # robot stands still (drive() stopped it and waited for it to settle), so motion gating lets nothing
+    # else in: the count restarted at 0 or 1, however long this machine takes to ask.
+    assert env.stats()["engine"]["scans_integrated"] <= 1
