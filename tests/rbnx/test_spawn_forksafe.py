@@ -12,6 +12,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 SCRIPT = r"""
 import sys, threading, time
 from pathlib import Path
@@ -32,7 +34,9 @@ def idle_client():  # a live channel whose poller is mostly idle: the case that 
 
 for _ in range(2):
     threading.Thread(target=idle_client, daemon=True).start()
-procs.set_supervised(True)  # children get the parent-death preexec, as under rbnx boot
+procs.set_supervised(True)  # children get the parent-death signal, as under rbnx boot
+if sys.argv[2] == "preexec":  # the fallback where util-linux setpriv is missing: a real fork()
+    procs._SETPRIV = None
 n, bad = int(sys.argv[1]), []
 for i in range(n):
     g = procs.spawn(f"child{i}", ["/bin/true"], Path("."), {}, None)
@@ -45,9 +49,11 @@ print(f"spawned {n}, failed {len(bad)} {bad[:5]}")
 """
 
 
-def test_spawn_under_open_grpc_channels_never_aborts_the_child() -> None:
+@pytest.mark.parametrize("how", ["setpriv", "preexec"])
+def test_spawn_under_open_grpc_channels_never_aborts_the_child(how: str) -> None:
+    """Both ways rbnx sets the parent-death signal: setpriv after vfork+exec, or a preexec hook after fork()."""
     env = {k: v for k, v in os.environ.items() if k != "GRPC_ENABLE_FORK_SUPPORT"}
-    res = subprocess.run([sys.executable, "-c", SCRIPT, "200"], capture_output=True, text=True, timeout=300,
+    res = subprocess.run([sys.executable, "-c", SCRIPT, "200", how], capture_output=True, text=True, timeout=300,
                          env=env)
     assert res.returncode == 0, res.stderr[-2000:]
     assert "spawned 200, failed 0" in res.stdout, res.stdout + res.stderr[-2000:]
