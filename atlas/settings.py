@@ -16,6 +16,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from robonix_api.validation import field_errors
+
 DEFAULT_LISTEN = "127.0.0.1:50051"
 MAX_CONFIG_JSON = 64 * 1024  # a settings object, not a data file
 
@@ -76,9 +78,7 @@ def parse_config_json(text: str) -> JsonSettings:
     try:
         parsed = JsonSettings.model_validate(raw)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise ValueError(f"--config-json: {where}: {first['msg']}") from None
+        raise ValueError(f"--config-json: {field_errors(exc)}") from None
     return parsed
 
 
