@@ -43,7 +43,8 @@ def test_robonix_api_package_runs_unchanged_under_rbnx_boot(tmp_path: Path) -> N
     if shutil.which("bash") is None:
         pytest.skip("rbnx runs start: with bash")
     pkg = shutil.copytree(PKG, tmp_path / "robonix_pkg", ignore=shutil.ignore_patterns("__pycache__", ".rbnx-built"))
-    with RbnxBoot(pkg / "deploy.yaml", tmp_path) as boot:
+    # --serial: the service starts alone, so it must answer Deferred (in parallel the lidar may be up first)
+    with RbnxBoot(pkg / "deploy.yaml", tmp_path, "--serial") as boot:
         boot.wait_ready(2)
         out = boot.output()
         assert f"deferred(waiting for {LIDAR})" in out, out

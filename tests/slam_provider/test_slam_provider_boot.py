@@ -36,7 +36,8 @@ def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
     path = tmp_path / "deploy.yaml"
     path.write_text(yaml.safe_dump(deploy, sort_keys=False))
     assert path.read_text().index("service:") < path.read_text().index("primitive:")
-    with RbnxBoot(path, tmp_path) as boot:
+    # --serial: SLAM starts alone, so it must answer Deferred (in parallel the HAL may already be up)
+    with RbnxBoot(path, tmp_path, "--serial") as boot:
         boot.wait_ready(2)
         text = boot.output()
         assert "waiting for robonix/primitive/lidar/lidar" in text, text

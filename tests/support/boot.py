@@ -21,17 +21,17 @@ def rbnx_cmd() -> list[str]:
 
 
 class RbnxBoot:
-    """``rbnx boot -f deploy`` in ``tmp`` (own state dir, atlas on a port of the OS's choosing, logs in
-    tmp/logs, output in tmp/boot.out); killed on leaving the ``with`` block if still running."""
+    """``rbnx boot -f deploy [extra…]`` in ``tmp`` (own state dir, atlas on a port of the OS's choosing, logs
+    in tmp/logs, output in tmp/boot.out); killed on leaving the ``with`` block if still running."""
 
-    def __init__(self, deploy: Path, tmp: Path) -> None:
+    def __init__(self, deploy: Path, tmp: Path, *extra: str) -> None:
         self.out, self.logs, self.state_dir = tmp / "boot.out", tmp / "logs", tmp / "state"
         env = dict(os.environ, RBNX_STATE_DIR=str(self.state_dir), RBNX_ATLAS_LISTEN="127.0.0.1:0",
                    RBNX_PYTHON=sys.executable, PYTHONUNBUFFERED="1")
         for name in ("ROBONIX_ATLAS", "RBNX_INSTANCE_NAME", "RBNX_DEPLOY_MANAGED"):
             env.pop(name, None)
         with open(self.out, "w") as fh:
-            self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--log-dir", str(self.logs)],
+            self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--log-dir", str(self.logs), *extra],
                                          env=env, cwd=tmp, stdout=fh, stderr=subprocess.STDOUT)
         self.pids: list[int] = []
 
