@@ -26,12 +26,11 @@ from mcp.shared.exceptions import MCPError
 
 from robonix_api.contracts import ContractSpec
 from robonix_api.grpc_contracts import StatusError, invoke
-from robonix_api.proto_schema import message_class, message_schema
-from robonix_api.tool import build_input, codegen_input_class, input_schema, wire_output_for_json
+from robonix_api.mcp_tools import MCP_PATH, tool_shape
+from robonix_api.netutil import bind_listener
+from robonix_api.tool import build_input, wire_output_for_json
 
 log = logging.getLogger(__name__)
-
-MCP_PATH = "/mcp/"
 
 
 @dataclass
@@ -51,16 +50,8 @@ class McpTool:
 
     @classmethod
     def build(cls, spec: ContractSpec, handler: Callable[..., Any], description: str = "") -> McpTool:
-        doc = (description or (handler.__doc__ or "")).strip() or spec.description or spec.id
-        codegen_cls = codegen_input_class(handler)
-        if codegen_cls is not None:
-            return cls(spec, handler, doc, codegen_cls, input_schema(codegen_cls))
-        if not spec.idl:
-            raise TypeError(f"@mcp({spec.id!r}): the contract is not in the catalogue, so the handler's input "
-                            "must be annotated with a codegen class (json_schema()/from_dict())")
-        req_name, _ = spec.proto_types()
-        req_cls = message_class(req_name)
-        return cls(spec, handler, doc, req_cls, message_schema(req_cls.DESCRIPTOR))
+        shape = tool_shape(spec, handler, description)
+        return cls(spec, handler, shape.description, shape.request_cls, shape.input_schema)
 
     def call(self, arguments: dict[str, Any]) -> types.CallToolResult:
         """Parse the arguments into the request type, run the handler, return structured output."""
@@ -118,11 +109,12 @@ class McpToolServer:
         # Handlers are plain blocking functions; keep the event loop free.
         return await anyio.to_thread.run_sync(tool.call, dict(params.arguments or {}))
 
-    def start(self, timeout_s: float = 30.0) -> int:
-        """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
+    def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> int:
+        """Serve in a daemon thread (on ``sock`` if given, else on port 0 of the host); return the port
+        once accepting."""
         app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host)
         self._asgi = AsgiServer(app, host=self._host)
-        self.port = self._asgi.start(timeout_s)
+        self.port = self._asgi.start(timeout_s, sock=sock)
         return self.port
 
     def stop(self, timeout_s: float = 5.0) -> None:
@@ -143,11 +135,10 @@ class AsgiServer:
         self._sock: socket.socket | None = None
         self.port = 0
 
-    def start(self, timeout_s: float = 30.0) -> int:
-        """Bind port 0 on the host, serve in a daemon thread, return the port once accepting."""
-        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((self._host, 0))
+    def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> int:
+        """Serve in a daemon thread, return the port once accepting. ``sock`` is a socket already bound
+        (and possibly listening, see :func:`bind_listener`); without it port 0 of the host is bound."""
+        sock = sock if sock is not None else bind_listener(self._host, listen=False)
         self.port = sock.getsockname()[1]
         config = uvicorn.Config(self._app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
         self._server = uvicorn.Server(config)
@@ -172,3 +163,4 @@ class AsgiServer:
         if self._sock is not None:
             self._sock.close()
             self._sock = None
+

@@ -60,3 +60,14 @@ def advertise_host(bind: str, atlas_address: str) -> str:
 def host_port(host: str, port: int) -> str:
     """``host:port`` with IPv6 literals bracketed (gRPC endpoints carry no scheme)."""
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def bind_listener(host: str, *, listen: bool = True) -> socket.socket:
+    """A TCP socket bound to port 0 of ``host``; listening already when ``listen`` (clients that connect
+    then wait in the backlog until a server takes the socket over)."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    sock.bind((host, 0))
+    if listen:
+        sock.listen(128)
+    return sock

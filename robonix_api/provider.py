@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import os
 import signal
+import socket
 import subprocess
 import threading
 import time
@@ -413,17 +414,29 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
             log.info("atlas keeps one driver per provider; %s not declared (%s)", contract, exc.details())
 
     def _start_mcp(self, bind: str, host: str) -> None:
+        """Listen and declare the tools now; load the MCP server stack later (robonix_api.mcp_deferred)."""
         import json
 
-        from robonix_api.mcp_server import MCP_PATH, McpTool, McpToolServer
+        from robonix_api.mcp_deferred import DeferredMcpServer
+        from robonix_api.mcp_tools import MCP_PATH, tool_shape
 
-        tools = [McpTool.build(mcp_contract_spec(cid), fn, desc) for cid, (fn, desc) in self._mcp_handlers.items()]
-        self._mcp_server = McpToolServer(self.id, tools, host=bind)
+        handlers = dict(self._mcp_handlers)
+        shapes = {cid: tool_shape(mcp_contract_spec(cid), fn, desc) for cid, (fn, desc) in handlers.items()}
+
+        def build(sock: socket.socket) -> Any:
+            from robonix_api.mcp_server import McpTool, McpToolServer
+
+            tools = [McpTool(mcp_contract_spec(cid), handlers[cid][0], shape.description, shape.request_cls,
+                             shape.input_schema) for cid, shape in shapes.items()]
+            server = McpToolServer(self.id, tools, host=bind)
+            server.start(sock=sock)
+            return server
+
+        self._mcp_server = DeferredMcpServer(self.id, bind, build)
         port = self._mcp_server.start()
         self.mcp_url = f"http://{netutil.host_port(host, port)}{MCP_PATH}"
-        for tool in tools:
-            self.declare_mcp(tool.spec.id, input_schema_json=json.dumps(tool.input_schema),
-                             description=tool.description)
+        for cid, shape in shapes.items():
+            self.declare_mcp(cid, input_schema_json=json.dumps(shape.input_schema), description=shape.description)
 
     def run(self) -> None:
         """Serve until CMD_SHUTDOWN or SIGTERM/SIGINT (main thread), then tear down and return."""

@@ -12,6 +12,7 @@ stops the loop and closes DDS. A failed or deferred INIT leaves the previous ses
 from __future__ import annotations
 
 import logging
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +22,7 @@ from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
 from slam_service.core import SlamConfig, SlamEngine
+from slam_service.core.numeric import load_numeric_stack
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
@@ -99,7 +101,8 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
 
     def start(self, setup: SlamSetup) -> SlamLoop:
         cfg, bindings = setup.cfg, setup.bindings
-        if self._map_pub is None:
+        if self._map_pub is None:  # first start: the inputs exist, so the boot's critical path is behind us
+            threading.Thread(target=load_numeric_stack, name="scipy-load", daemon=True).start()
             self._map_pub = self.svc.create_publisher(OCCUPANCY_GRID, topic=self.map_topic, msg_type=OccupancyGrid,
                                                       qos=MAP_QOS, declare=False)
             self._announcer = LifecycleAnnouncer(self.svc.create_publisher(

@@ -6,7 +6,6 @@ import math
 from collections.abc import Iterable, Sequence
 
 import numpy as np
-from scipy import ndimage
 
 from robonix_api.grid import FREE, OCCUPIED, GridMap
 
@@ -49,6 +48,8 @@ def rasterize(obstacles: Iterable[Obstacle], bounds: Sequence[float], resolution
 
 def reachable(grid: GridMap, start: tuple[float, float], points: Iterable[tuple[float, float]]) -> list[bool]:
     """Which points are 8-connected to ``start`` through free cells of ``grid`` (an inflated raster)."""
+    from scipy import ndimage  # here, not at the top: the HAL imports this module before it registers
+
     free = grid.data == FREE
     labels, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=int))
 

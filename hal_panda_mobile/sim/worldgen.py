@@ -7,7 +7,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from robonix_api.grid import GridMap, MapFileError, load_map_yaml
 
@@ -41,6 +40,8 @@ def _free_start(grid: GridMap, free: np.ndarray) -> tuple[float, float]:
     """The free cell farthest from any non-free cell: a start pose that is free by construction."""
     if not free.any():
         raise SimConfigError("from_map: the map has no free cell to start in")
+    from scipy import ndimage  # here, not at the top: keeps scipy out of the HAL's start-up
+
     dist = ndimage.distance_transform_edt(np.pad(free, 1))[1:-1, 1:-1]
     r, c = np.unravel_index(int(np.argmax(dist)), dist.shape)
     x, y = grid.cell_to_world(c, r)

@@ -2,17 +2,19 @@
 
 ``rbnx boot`` serves :class:`Gateway` next to the atlas (:class:`BootGateway`), prints its URL and records
 it in the boot state file (``gateway``), where ``rbnx tools`` and ``rbnx lifecycle`` find it. The MCP
-stack is imported only when a gateway is actually built (it takes a second or two on a busy machine).
+stack is imported only when a gateway is actually served (it takes a second or two on a busy machine).
 """
 
 from __future__ import annotations
 
+import socket
 import sys
-import threading
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from rbnx.gateway.control import ControlError, Entry, LifecycleControl, merge_patch
+from robonix_api.mcp_deferred import DeferredMcpServer
+from robonix_api.mcp_tools import MCP_PATH
 
 if TYPE_CHECKING:
     from rbnx.gateway.server import Gateway
@@ -27,7 +29,7 @@ def __getattr__(name: str) -> Any:
 
 
 def start_for_boot(atlas_addr: str, runners: Iterable[Any], shutdown_all: Callable[[], None],
-                   driver_timeout: float) -> Gateway:
+                   driver_timeout: float, sock: socket.socket | None = None) -> Gateway:
     """The gateway of one ``rbnx boot``: its entries are the boot's runners (``.entry``, ``.restarts``)."""
     from rbnx.gateway.server import Gateway
 
@@ -38,37 +40,38 @@ def start_for_boot(atlas_addr: str, runners: Iterable[Any], shutdown_all: Callab
     control = LifecycleControl(atlas_addr, entries, driver_timeout=driver_timeout, shutdown_all=shutdown_all,
                                restarts=lambda name: int(getattr(by_name.get(name), "restarts", 0) or 0))
     gw = Gateway(atlas_addr, control)
-    gw.start()
+    gw.start(sock=sock)
     return gw
 
 
 class BootGateway:
-    """Builds and serves the boot's gateway on a thread, so the entries start booting meanwhile;
-    ``on_ready(url)`` is called from that thread once it serves."""
+    """The boot's gateway: its port listens (and ``on_ready(url)`` is called) at once, while the MCP stack
+    is loaded when the first agent connects or a few seconds later (:mod:`robonix_api.mcp_deferred`), so
+    that second of CPU is not taken from the entries that are booting meanwhile."""
 
     def __init__(self, atlas_addr: str, runners: Iterable[Any], shutdown_all: Callable[[], None],
-                 driver_timeout: float, on_ready: Callable[[str], None]) -> None:
+                 driver_timeout: float, on_ready: Callable[[str], None], host: str = "127.0.0.1") -> None:
         self._args = (atlas_addr, list(runners), shutdown_all, driver_timeout)
         self._on_ready = on_ready
-        self.gateway: Gateway | None = None
-        self._thread = threading.Thread(target=self._run, name="gateway-start", daemon=True)
+        self._host = host
+        self._deferred: DeferredMcpServer | None = None
 
     def start(self) -> BootGateway:
-        self._thread.start()
+        self._deferred = DeferredMcpServer("gateway", self._host, self._build)
+        port = self._deferred.start()
+        self._on_ready(f"http://{self._host}:{port}{MCP_PATH}")
         return self
 
-    def _run(self) -> None:
+    def _build(self, sock: socket.socket) -> Gateway:
         try:
-            self.gateway = start_for_boot(*self._args)
+            return start_for_boot(*self._args, sock=sock)
         except (RuntimeError, OSError, ImportError) as exc:
             print(f"rbnx boot: MCP gateway not started: {exc}", file=sys.stderr, flush=True)
-            return
-        self._on_ready(self.gateway.url)
+            raise
 
     def stop(self) -> None:
-        self._thread.join(60.0)
-        if self.gateway is not None:
-            self.gateway.stop()
+        if self._deferred is not None:
+            self._deferred.stop()
 
 
 __all__ = ["BootGateway", "ControlError", "Entry", "Gateway", "LifecycleControl", "merge_patch", "start_for_boot"]

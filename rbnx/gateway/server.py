@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import logging
+import socket
 import weakref
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
@@ -36,11 +37,11 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
 from robonix_api.mcp_server import AsgiServer
+from robonix_api.mcp_tools import MCP_PATH
 from robonix_api.proto_gen import atlas_pb2
 
 log = logging.getLogger("rbnx.gateway")
 
-MCP_PATH = "/mcp/"
 POLL_S = 1.0
 FETCH_TIMEOUT_S = 20.0
 CALL_TIMEOUT_S = 120.0
@@ -120,10 +121,11 @@ class Gateway:
         self._links: dict[str, _Link] = {}
 
     # ------------------------------------------------------------------ serving
-    def start(self, timeout_s: float = 30.0) -> str:
+    def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> str:
+        """Serve (on ``sock`` when given: a socket bound and listening already); returns the URL."""
         app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host)
         self._http = AsgiServer(app, host=self.host, name="mcp-gateway")
-        port = self._http.start(timeout_s)
+        port = self._http.start(timeout_s, sock=sock)
         self.url = f"http://{self.host}:{port}{MCP_PATH}"
         return self.url
 

@@ -18,7 +18,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from robonix_api.geometry import compose, inverse, relative, transform_points
 from robonix_api.grid import GridMap
@@ -177,6 +176,8 @@ class SlamEngine:
         # walls would pull the fitted lines into the wall by up to half its thickness.
         occ = grid.data >= 65
         free = (grid.data >= 0) & (grid.data < 65)
+        from scipy import ndimage  # scipy loads with the first map, not at process start (boot time)
+
         touch = ndimage.binary_dilation(free, np.ones((3, 3), dtype=bool))
         r, col = np.nonzero(occ & touch)
         self._fixed_lookup.points = np.stack(grid.cell_to_world(col, r), axis=1)

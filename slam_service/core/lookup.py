@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 
 @dataclass
@@ -34,6 +36,8 @@ class LookupGrid:
                 r, c = np.nonzero(self.data >= 0.999 * self.data.max()) if self.data.any() else ([], [])
                 self.points = np.stack([self.origin_x + (np.asarray(c) + 0.5) * self.resolution,
                                         self.origin_y + (np.asarray(r) + 0.5) * self.resolution], axis=1)
+            from scipy.spatial import cKDTree  # loaded with the first scan, not at start-up (boot time)
+
             self._tree = cKDTree(self.points if len(self.points) else np.zeros((1, 2)) + 1e9)
         return self._tree
 
@@ -70,6 +74,8 @@ class LookupGrid:
         """
         if not mask.any():
             return cls(np.zeros(mask.shape, dtype=np.float32), resolution, origin_x, origin_y)
+        from scipy import ndimage  # loaded with the first scan, not at start-up (boot time)
+
         s = sigma / resolution
         cut2 = (3.0 * s) ** 2
         data = np.zeros(mask.shape, dtype=np.float32)

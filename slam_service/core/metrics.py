@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import ndimage
 
 from robonix_api.grid import GridMap
 
@@ -61,6 +60,8 @@ def occupied_iou(est: GridMap, gt: GridMap, *, tolerance_cells: int = 1, observe
     e = np.zeros(gt.data.shape, dtype=bool)
     e[gr[inside], gc[inside]] = True
     g = gt.data >= 65
+    from scipy import ndimage  # evaluation only: not loaded by the service's start-up
+
     k = 2 * tolerance_cells + 1
     st = np.ones((k, k), dtype=bool)
     if observed_only:

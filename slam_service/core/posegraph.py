@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 EDGE_ODOM, EDGE_SEQUENTIAL, EDGE_LOOP = 0, 1, 2
 
@@ -111,6 +113,9 @@ class PoseGraph:
             rho[big] = 2.0 * np.sqrt(k2) * r - k2
             return float(rho.sum()), w
 
+        from scipy import sparse  # imported on first use: keeps scipy out of the provider's start-up
+        from scipy.sparse import linalg as sparse_linalg
+
         x = self.poses.copy()
         start = x.copy()
         e, a, b = _errors(x, i, j, z, jacobians=True)
@@ -126,8 +131,8 @@ class PoseGraph:
             diag = h.diagonal()
             improved = False
             for _ in range(8):
-                hl = h + sp.diags(lam * (diag + 1e-9), format="csc")
-                dx = spla.spsolve(hl, -g)
+                hl = h + sparse.diags(lam * (diag + 1e-9), format="csc")
+                dx = sparse_linalg.spsolve(hl, -g)
                 if not np.all(np.isfinite(dx)):
                     lam *= 10
                     continue
@@ -186,6 +191,8 @@ def _errors(x: NDArray, i: NDArray, j: NDArray, z: NDArray, jacobians: bool = Fa
 
 def _normal_equations(n: int, i: NDArray, j: NDArray, e: NDArray, a: NDArray, b: NDArray, info: NDArray
                       ) -> tuple[sp.csc_matrix, NDArray]:
+    from scipy import sparse
+
     at_o = np.einsum("eki,ekl->eil", a, info)  # A^T Omega
     bt_o = np.einsum("eki,ekl->eil", b, info)
     blocks = [(i, i, at_o @ a), (i, j, at_o @ b), (j, i, bt_o @ a), (j, j, bt_o @ b)]
@@ -195,7 +202,7 @@ def _normal_equations(n: int, i: NDArray, j: NDArray, e: NDArray, a: NDArray, b:
         rows.append((3 * bi[:, None, None] + rr[None]).ravel())
         cols.append((3 * bj[:, None, None] + cc[None]).ravel())
         vals.append(blk.ravel())
-    h = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+    h = sparse.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(3 * n, 3 * n)).tocsc()
     g = np.zeros(3 * n)
     np.add.at(g, (3 * i[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", at_o, e).ravel())
