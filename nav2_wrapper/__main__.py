@@ -1,8 +1,6 @@
 """``python -m nav2_wrapper``: the navigation provider (``python -m nav2_wrapper.atlas_bridge`` is an alias)."""
 
-from nav2_wrapper.core.warmup import compile_in_background
 from robonix_api.hosting import run_provider
 
 if __name__ == "__main__":
-    compile_in_background()  # numba kernels compile/load while we register and wait for the map
     raise SystemExit(run_provider("nav2_wrapper.provider:build_provider", log_env="NAV_LOG_LEVEL"))

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from nav2_wrapper.core import Footprint, Navigator
+from nav2_wrapper.core.warmup import compile_in_background
 from nav2_wrapper.params import LoadedParams, ParamsError, load_params
 from robonix_api import Deferred, Err, Service
 from robonix_api.dds import Path as PathMsg
@@ -62,6 +63,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         return s.work if s is not None else None
 
     def prepare(self, config: dict[str, Any]) -> NavSetup | Err | Deferred:
+        compile_in_background()  # once: numba kernels load/compile while we wait for the map
         try:
             cfg = parse_config(config)
         except ConfigError as exc:

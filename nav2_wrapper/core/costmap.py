@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from robonix_api.grid import GridMap
 
@@ -297,6 +296,8 @@ class Costmap:
         inner = (slice(r0 - R0, r1 - R0), slice(c0 - C0, c1 - C0))
         m_in = m[inner]
         if lethal.any():
+            from scipy import ndimage  # with the first map, not at process start (boot time)
+
             dist = ndimage.distance_transform_edt(~lethal)[inner] * self.resolution
             fp = self.cfg.footprint
             cost = inflation_cost(dist, fp.inscribed_radius, self.cfg.inflation_radius, self.cfg.cost_scaling_factor)
