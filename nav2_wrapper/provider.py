@@ -115,7 +115,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
             if time.monotonic() > deadline:
                 loop.close(INIT_FAILED)
                 return Err("; ".join(f"{m} within {cfg.action_wait_s:g} s" for m in missing))
-            time.sleep(0.1)
+            time.sleep(0.02)  # the first map is on the boot's critical path: notice it promptly
         loop.apply_speed()
         loop.warm_up()
         loop.start()

@@ -12,7 +12,6 @@ stops the loop and closes DDS. A failed or deferred INIT leaves the previous ses
 from __future__ import annotations
 
 import logging
-import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,7 +21,7 @@ from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
 from slam_service.core import SlamConfig, SlamEngine
-from slam_service.core.numeric import load_numeric_stack
+from slam_service.core.numeric import load_in_background
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
@@ -77,6 +76,7 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         serve_contracts(svc, MapHandlers(self.current).table())
 
     def prepare(self, config: dict[str, Any]) -> SlamSetup | Err | Deferred:
+        load_in_background()  # once: scipy loads while we wait for the lidar, not on the first scan
         try:
             cfg, slam_cfg = parse_config(config)
             footprint = load_footprint(cfg.robot_description)
@@ -101,8 +101,7 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
 
     def start(self, setup: SlamSetup) -> SlamLoop:
         cfg, bindings = setup.cfg, setup.bindings
-        if self._map_pub is None:  # first start: the inputs exist, so the boot's critical path is behind us
-            threading.Thread(target=load_numeric_stack, name="scipy-load", daemon=True).start()
+        if self._map_pub is None:
             self._map_pub = self.svc.create_publisher(OCCUPANCY_GRID, topic=self.map_topic, msg_type=OccupancyGrid,
                                                       qos=MAP_QOS, declare=False)
             self._announcer = LifecycleAnnouncer(self.svc.create_publisher(
