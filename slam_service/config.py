@@ -18,6 +18,7 @@ from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
 from robonix_api.validation import Seconds, field_errors, per_role
 from robonix_nav_data import resources
 from slam_service.core import SlamConfig
+from slam_service.map_paths import default_maps_root
 
 REPO_ROOT = resources.data_root()
 DEFAULT_ROBOT = "config/panda_mobile.yaml"
@@ -28,8 +29,9 @@ class ConfigError(ValueError):
 
 
 def default_map_dir() -> str:
-    """``$ROBONIX_MAP_DIR`` or ``~/.local/share/robonix/maps`` (resolved when the config is parsed)."""
-    return os.environ.get("ROBONIX_MAP_DIR", "").strip() or str(Path.home() / ".local/share/robonix/maps")
+    """``$ROBONIX_MAP_DIR``, else the maps root itself (``$ROBONIX_MAPS_ROOT``, default
+    ``~/.local/share/robonix/maps``); it must lie under the maps root either way."""
+    return os.environ.get("ROBONIX_MAP_DIR", "").strip() or str(default_maps_root())
 
 
 class _Model(BaseModel):
@@ -62,9 +64,9 @@ class ProviderConfig(_Model):
     provider_ids: ProviderIds = ProviderIds()  # type: ignore[valid-type]
     frames: Frames = Frames()
     use_sim_time: bool = True
-    map_dir: str = Field(default_factory=default_map_dir)
+    map_dir: str = Field(default_factory=default_map_dir, max_length=4096)  # under the maps root
     mode: Literal["mapping", "localization"] = "mapping"
-    map_id: str = ""  # load this saved map at INIT
+    map_id: str = Field("", max_length=64)  # load this saved map at INIT
     initial_pose: InitialPose | None = None
     slam: dict[str, Any] = Field(default_factory=dict)  # SlamConfig fields
     map_publish_period_s: Seconds = Field(1.0, gt=0)  # rate cap of /map

@@ -19,6 +19,7 @@ from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
 from robonix_api.validation import require_finite
 from slam_service.core import SlamEngine, render_map_png
+from slam_service.map_paths import check_note, clip
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
 
 log = logging.getLogger("slam_service.handlers")
@@ -54,6 +55,10 @@ class MapHandlers:
     def save_map(self, req: map_pb2.SaveMap_Request) -> map_pb2.SaveMap_Response:
         """Save the current map as <map_dir>/<map_id>/ (map.yaml + map.pgm, session.npz, meta.json)."""
         map_id = _map_id(req.map_id)
+        try:
+            check_note(req.note)
+        except ValueError as exc:
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, str(exc)) from None
         s = self._session()
         if s is None:
             return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
@@ -80,7 +85,7 @@ class MapHandlers:
         map_id = _map_id(req.map_id)
         mode = req.mode.strip() or "localization"
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {mode!r}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
         if req.has_initial_pose:
             require_finite(req, "x", "y", "theta")
         s = self._session()
@@ -103,9 +108,9 @@ class MapHandlers:
         if s is None:
             return map_pb2.ListMaps_Response(ok=False, detail=NOT_INIT, maps_json="[]")
         store: MapStore = s.setup.store
-        maps = store.list()
-        return map_pb2.ListMaps_Response(ok=True, detail=f"{len(maps)} map(s) in {store.root}",
-                                         maps_json=json.dumps(maps))
+        maps, total = store.listing()
+        shown = f"{len(maps)} map(s)" if len(maps) == total else f"newest {len(maps)} of {total} map(s) (reply capped)"
+        return map_pb2.ListMaps_Response(ok=True, detail=f"{shown} in {store.root}", maps_json=json.dumps(maps))
 
     def delete_map(self, req: map_pb2.DeleteMap_Request) -> map_pb2.DeleteMap_Response:
         """Delete a saved map's folder (the map in memory is not affected)."""
@@ -124,7 +129,7 @@ class MapHandlers:
         """mapping <-> localization (localization on the loaded map, or on the map built so far)."""
         mode = req.mode.strip()
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {mode!r}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
         s = self._session()
         if s is None:
             return map_pb2.SwitchMode_Response(ok=False, detail=NOT_INIT)

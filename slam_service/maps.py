@@ -1,42 +1,66 @@
-"""Saved maps on disk: ``<map_dir>/<map_id>/{map.yaml, map.pgm, session.npz, meta.json}``.
+"""Saved maps on disk: ``<map_dir>/<map_id>/{map.yaml, map.pgm, session.npz, meta.json, .robonix-map}``.
 
 map.yaml + map.pgm are Nav2 map_server format (readable by map_server and the HAL's ``from_map``);
 session.npz lets mapping continue later. A save is staged in a hidden sibling folder and swapped in by
-rename, so a failed or interrupted save never leaves a half-written or mixed map behind.
+rename, so a failed or interrupted save never leaves a half-written or mixed map behind. Saves of one id
+are serialized (a lock per id in this process, ``flock`` on the map_dir across processes for the swap).
+``map_dir`` must lie under the maps root, and only folders holding the store's marker are replaced or
+deleted (:mod:`slam_service.map_paths`).
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
+import logging
 import os
-import re
 import shutil
 import tempfile
+import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from robonix_api.grid import GridMap, MapFileError, atomic_write, load_map_yaml, save_map_yaml
 from slam_service.core import SessionData, SessionFileError, SlamConfig, SlamEngine, load_session
+from slam_service.map_paths import (
+    MARKER,
+    NOTE_MAX,
+    MapDirError,
+    MapIdError,
+    check_id,
+    check_note,
+    is_map_folder,
+    resolve_map_dir,
+    stale_staging,
+)
 
-_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
+log = logging.getLogger("slam_service.maps")
 MAP_YAML, MAP_PGM, SESSION, META = "map.yaml", "map.pgm", "session.npz", "meta.json"
+LOCK_FILE = ".robonix-maps.lock"
+#: list() stops at this many maps or this many bytes of JSON, well below gRPC's 4 MB message limit.
+LIST_MAX_ENTRIES = 1000
+LIST_MAX_BYTES = 1 << 20
+#: meta.json larger than this is not read (a hand-written or legacy file must not blow up list_maps).
+META_MAX_BYTES = 64 * 1024
 
-
-class MapIdError(ValueError):
-    """The map id is not a plain name (path separators, '..', empty, too long)."""
+__all__ = ["LoadedMap", "MapDirError", "MapIdError", "MapStore", "MapStoreError", "check_id", "load_engine"]
 
 
 class MapStoreError(RuntimeError):
     """A save/load/delete failed; the message says which file and why."""
 
 
-def check_id(map_id: str) -> str:
-    if not _ID.match(map_id or "") or ".." in map_id:
-        raise MapIdError(f"map_id: {map_id!r} is not a valid name (letters, digits, '.', '_', '-'; "
-                         "no path separators or '..'; at most 64 characters)")
-    return map_id
+_id_locks: dict[tuple[str, str], threading.Lock] = {}
+_id_locks_guard = threading.Lock()
+
+
+def _id_lock(root: Path, map_id: str) -> threading.Lock:
+    with _id_locks_guard:
+        return _id_locks.setdefault((str(root), map_id), threading.Lock())
 
 
 @dataclass
@@ -48,18 +72,77 @@ class LoadedMap:
 
 
 class MapStore:
-    def __init__(self, root: str | os.PathLike[str]) -> None:
-        self.root = Path(root).expanduser()
+    """The saved maps in one folder under the maps root.
+
+    ``MapStore(map_dir)`` resolves ``map_dir`` against the maps root (``maps_root``, default
+    :func:`~slam_service.map_paths.default_maps_root`) and raises MapDirError naming ``map_dir`` when it
+    lies outside; then it cleans staging folders that a killed save left behind.
+    """
+
+    def __init__(self, map_dir: str | os.PathLike[str], maps_root: str | os.PathLike[str] | None = None) -> None:
+        self.root = resolve_map_dir(map_dir, maps_root)
+        self._maps_root = maps_root
+        self.cleaned = self.clean_staging()
 
     def path(self, map_id: str) -> Path:
         return self.root / check_id(map_id)
+
+    def _check_root(self) -> None:
+        """The folder must still resolve to itself (no symlink swapped in since INIT)."""
+        try:
+            again = resolve_map_dir(self.root, self._maps_root)
+        except MapDirError as exc:
+            raise MapStoreError(str(exc)) from None
+        if again != self.root:
+            raise MapStoreError(f"map_dir {self.root} now resolves to {again}; send CMD_INIT again")
+
+    @contextmanager
+    def _swap_lock(self) -> Iterator[None]:
+        """Exclusive across processes for the rename swap (and the staging cleanup)."""
+        fd = os.open(self.root / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            yield
+        finally:
+            os.close(fd)  # releases the lock
+
+    def clean_staging(self) -> int:
+        """Remove staging folders of saves whose process is gone; an interrupted swap (the old map moved
+        aside, the new one not yet in) gets its old map back. Returns how many folders were handled."""
+        if not self.root.is_dir():
+            return 0
+        n = 0
+        try:
+            with self._swap_lock():
+                for path, map_id, kind in stale_staging(self.root):
+                    target = self.root / map_id
+                    if kind == "old" and not target.exists() and not target.is_symlink():
+                        os.rename(path, target)
+                        log.warning("restored map %r from %s (a save was interrupted)", map_id, path.name)
+                    else:
+                        shutil.rmtree(path, ignore_errors=True)
+                    n += 1
+        except OSError as exc:
+            log.warning("cannot clean staging folders in %s: %s", self.root, exc.strerror or exc)
+        if n:
+            log.info("cleaned %d staging folder(s) left by interrupted saves in %s", n, self.root)
+        return n
 
     def save(self, map_id: str, grid: GridMap, session_writer: Any, note: str = "") -> Path:
         """Write all files into a staging folder, then swap it in. ``session_writer(path)`` or None."""
         target = self.path(map_id)
         try:
+            check_note(note)
+        except ValueError as exc:
+            raise MapStoreError(str(exc)) from None
+        with _id_lock(self.root, map_id):
+            return self._save_locked(map_id, target, grid, session_writer, note)
+
+    def _save_locked(self, map_id: str, target: Path, grid: GridMap, session_writer: Any, note: str) -> Path:
+        try:
             self.root.mkdir(parents=True, exist_ok=True)
-            stage = Path(tempfile.mkdtemp(dir=self.root, prefix=f".{map_id}.saving-"))
+            self._check_root()
+            stage = Path(tempfile.mkdtemp(dir=self.root, prefix=f".{map_id}.saving-{os.getpid()}-"))
         except OSError as exc:
             raise MapStoreError(f"cannot write to map_dir {self.root}: {exc.strerror or exc}") from None
         try:
@@ -71,18 +154,32 @@ class MapStore:
                     "width": grid.width, "height": grid.height, "origin": [grid.origin_x, grid.origin_y, grid.origin_yaw],
                     "has_session": session_writer is not None}
             atomic_write(stage / META, json.dumps(meta, indent=1).encode())
-            old = None
-            if target.exists():
-                old = self.root / f".{map_id}.old-{os.getpid()}-{time.monotonic_ns()}"
-                os.rename(target, old)
-            os.rename(stage, target)
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+            atomic_write(stage / MARKER, b"written by the robonix-nav map store; delete_map removes only such folders\n")
+            with self._swap_lock():
+                self._swap(map_id, stage, target)
         except Exception as exc:
             shutil.rmtree(stage, ignore_errors=True)
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
             raise MapStoreError(f"cannot save map {map_id!r} to {target}: {reason}") from None
         return target
+
+    def _swap(self, map_id: str, stage: Path, target: Path) -> None:
+        """Move the existing map aside, the staged one in, and delete the old one; on failure put it back."""
+        old = None
+        if target.exists() or target.is_symlink():
+            if not is_map_folder(target):
+                raise MapStoreError(f"{target} exists and was not written by the map store (no {MARKER} marker); "
+                                    "choose another map_id")
+            old = self.root / f".{map_id}.old-{os.getpid()}-{time.monotonic_ns()}"
+            os.rename(target, old)
+        try:
+            os.rename(stage, target)
+        except OSError:
+            if old is not None:
+                os.rename(old, target)
+            raise
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
 
     def load(self, map_id: str, with_session: bool) -> LoadedMap:
         folder = self.path(map_id)
@@ -104,35 +201,65 @@ class MapStore:
 
     def _meta(self, folder: Path) -> dict[str, Any]:
         try:
-            meta = json.loads((folder / META).read_text())
+            path = folder / META
+            if path.stat().st_size > META_MAX_BYTES:
+                return {}
+            meta = json.loads(path.read_text())
             return meta if isinstance(meta, dict) else {}
-        except (OSError, ValueError):
+        except (OSError, ValueError, RecursionError):
             return {}
 
     def list(self) -> list[dict[str, Any]]:
-        """One entry per map folder (hidden staging folders skipped), newest first."""
+        """One entry per map folder (hidden staging folders skipped), newest first; at most
+        :data:`LIST_MAX_ENTRIES` entries and :data:`LIST_MAX_BYTES` of JSON (see :meth:`listing`)."""
+        return self.listing()[0]
+
+    def listing(self) -> tuple[list[dict[str, Any]], int]:
+        """``(entries, total)``: the newest maps that fit the caps, and how many map folders there are."""
         out: list[dict[str, Any]] = []
         if not self.root.is_dir():
-            return out
+            return out, 0
         for folder in self.root.iterdir():
-            if folder.name.startswith(".") or not folder.is_dir() or not _ID.match(folder.name):
+            if folder.name.startswith(".") or not folder.is_dir() or folder.is_symlink():
+                continue
+            try:
+                check_id(folder.name)
+            except MapIdError:
                 continue
             meta = self._meta(folder)
-            entry = {"map_id": folder.name, "path": str(folder), "note": meta.get("note", ""),
-                     "created": meta.get("created"), "resolution": meta.get("resolution"),
-                     "width": meta.get("width"), "height": meta.get("height"),
-                     "has_session": (folder / SESSION).is_file(), "valid": (folder / MAP_YAML).is_file()}
+            note = meta.get("note", "")
+            note = note[:NOTE_MAX] if isinstance(note, str) else ""
+            created = meta.get("created")
+            entry = {"map_id": folder.name, "path": str(folder), "note": note,
+                     "created": created if isinstance(created, int | float) else None,
+                     "resolution": meta.get("resolution"), "width": meta.get("width"), "height": meta.get("height"),
+                     "has_session": (folder / SESSION).is_file(), "valid": (folder / MAP_YAML).is_file(),
+                     "managed": (folder / MARKER).is_file()}
             out.append(entry)
-        return sorted(out, key=lambda e: -(e["created"] or 0.0))
+        out.sort(key=lambda e: -(e["created"] or 0.0))
+        kept: list[dict[str, Any]] = []
+        size = 2
+        for entry in out[:LIST_MAX_ENTRIES]:
+            size += len(json.dumps(entry)) + 2
+            if size > LIST_MAX_BYTES:
+                break
+            kept.append(entry)
+        return kept, len(out)
 
     def delete(self, map_id: str) -> None:
+        """Delete a map folder the store wrote; any other folder (no marker, a symlink) is refused."""
         folder = self.path(map_id)
         if not folder.is_dir():
             raise MapStoreError(f"no map {map_id!r} in {self.root}")
-        try:
-            shutil.rmtree(folder)
-        except OSError as exc:
-            raise MapStoreError(f"cannot delete {folder}: {exc.strerror or exc}") from None
+        if not is_map_folder(folder):
+            raise MapStoreError(f"{folder} was not written by the map store (no {MARKER} marker); not deleted")
+        self._check_root()
+        with _id_lock(self.root, map_id):
+            try:
+                with self._swap_lock():
+                    shutil.rmtree(folder)
+            except OSError as exc:
+                raise MapStoreError(f"cannot delete {folder}: {exc.strerror or exc}") from None
 
 
 def load_engine(store: MapStore, slam_cfg: SlamConfig, map_id: str, mode: str,

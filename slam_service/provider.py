@@ -24,7 +24,7 @@ from slam_service.core import SlamConfig, SlamEngine
 from slam_service.core.numeric import load_in_background
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
-from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.maps import MapDirError, MapIdError, MapStore, MapStoreError, check_id, load_engine
 from slam_service.telemetry import PAUSED, SHUTDOWN, LifecycleAnnouncer, MapSpans
 
 log = logging.getLogger("slam_service")
@@ -82,13 +82,13 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
             footprint = load_footprint(cfg.robot_description)
             if cfg.map_id:
                 check_id(cfg.map_id)
-        except (ConfigError, MapIdError) as exc:
+            store = MapStore(cfg.map_dir)  # MapDirError unless under the maps root; cleans dead saves' staging
+        except (ConfigError, MapIdError, MapDirError) as exc:
             return Err(str(exc))
         try:
             bindings = resolve_inputs(self.svc.atlas, self.svc.id, cfg)
         except MissingUpstream as exc:
             return Deferred(str(exc))
-        store = MapStore(cfg.map_dir)
         if cfg.map_id:
             pose = cfg.initial_pose.as_tuple() if cfg.initial_pose is not None else None
             try:

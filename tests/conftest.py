@@ -10,6 +10,8 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO / "tests") not in sys.path:
     sys.path.insert(0, str(REPO / "tests"))
@@ -17,3 +19,11 @@ if str(REPO / "tests") not in sys.path:
 # A domain id per test run (0..232 is Cyclone's valid range with the default port mapping).
 os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 200))
 os.environ.setdefault("CYCLONEDDS_URI", (REPO / "config" / "cyclonedds_loopback.xml").as_uri())
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _maps_root(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Saved maps may only live under the maps root: make it this run's temp base, so every test's
+    ``tmp_path`` map_dir is allowed and nothing is written to the user's own maps."""
+    if not os.environ.get("ROBONIX_MAPS_ROOT"):
+        os.environ["ROBONIX_MAPS_ROOT"] = str(tmp_path_factory.getbasetemp().resolve())

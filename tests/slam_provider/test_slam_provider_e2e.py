@@ -199,6 +199,9 @@ def test_bad_requests_fail_clearly(env: Env) -> None:
     assert not r.ok and "no map 'nope'" in r.detail
     assert env.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).mode == "localization"  # kept
     d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
+    assert not d.ok and ".robonix-map marker" in d.detail and broken.exists(), d.detail  # not written by the store
+    (broken / ".robonix-map").write_text("")
+    d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
     assert d.ok and not broken.exists()
 
 
