@@ -7,7 +7,7 @@ message starts with the field path, e.g. ``rates.scan_rate_hz: must be > 0``.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
@@ -25,6 +25,8 @@ from hal_panda_mobile.sim.errors import format_validation_error
 from robonix_api.config_types import FiniteFloat, TopicName
 from robonix_api.validation import finite
 
+#: Faster than this the sim cannot keep up anyway; a huge factor only starves the machine.
+MAX_REAL_TIME_FACTOR = 100.0
 RealTimeFactor = finite("must be a finite number >= 0 (0 = as fast as possible)")
 
 
@@ -41,12 +43,12 @@ class StartPose(_Model):
 class Rates(_Model):
     """Publishing rates in sim-time Hz; scan None means "from the robot description" (10 Hz)."""
 
-    physics_rate_hz: float = Field(500.0, ge=500.0)  # the core steps at >= 500 Hz
-    odom_rate_hz: float = Field(50.0, gt=0)
-    scan_rate_hz: float | None = Field(None, gt=0)
-    clock_rate_hz: float = Field(100.0, gt=0)
-    ground_truth_rate_hz: float = Field(10.0, gt=0)  # evaluation stream; the RPC gives any instant
-    hold_rate_hz: float = Field(1.0, gt=0)  # wall-clock Hz of republishing while not ACTIVE
+    physics_rate_hz: float = Field(500.0, ge=500.0, le=10000.0)  # the core steps at >= 500 Hz
+    odom_rate_hz: float = Field(50.0, gt=0, le=1000.0)
+    scan_rate_hz: float | None = Field(None, gt=0, le=100.0)
+    clock_rate_hz: float = Field(100.0, gt=0, le=1000.0)
+    ground_truth_rate_hz: float = Field(10.0, gt=0, le=1000.0)  # evaluation stream; the RPC gives any instant
+    hold_rate_hz: float = Field(1.0, gt=0, le=100.0)  # wall-clock Hz of republishing while not ACTIVE
 
 
 class Topics(_Model):
@@ -66,14 +68,14 @@ class Frames(_Model):
 
 
 class HalConfig(_Model):
-    scene: str | dict[str, Any] = "apartment"
+    scene: Annotated[str, Field(max_length=4096)] | dict[str, Any] = "apartment"
     start: StartPose | None = None
-    seed: int = 0
-    robot: str | None = None  # path to a robot description YAML; default config/panda_mobile.yaml
+    seed: int = Field(0, ge=0, le=2**63 - 1)
+    robot: str | None = Field(None, max_length=4096)  # robot description YAML; default config/panda_mobile.yaml
     odom_noise: OdomNoise = OdomNoise()  # also "none" or "realistic" (OdomNoise.realistic())
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
     rates: Rates = Rates()
-    real_time_factor: RealTimeFactor = Field(1.0, ge=0)  # 0: as fast as possible
+    real_time_factor: RealTimeFactor = Field(1.0, ge=0, le=MAX_REAL_TIME_FACTOR)  # 0: as fast as possible
     topics: Topics = Topics()
     frames: Frames = Frames()
     use_sim_time: bool = True

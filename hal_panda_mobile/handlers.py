@@ -22,9 +22,15 @@ from hal_panda_mobile.sim import PandaMobileSim, SimConfigError
 from robonix_api import StatusError
 from robonix_api.dds.messages import Time
 from robonix_api.proto_gen import builtin_interfaces_pb2, sim_pb2
-from robonix_api.validation import require_finite
+from robonix_api.validation import ID_MAX, clip, require_finite, require_len, require_range
 
 PREFIX = "robonix/primitive/sim/"
+#: Positions may lie this far outside the scene bounds (the floor extends 5 m beyond them).
+BOUNDS_MARGIN_M = 2.0
+#: Headings beyond this many radians are refused (finite but physically meaningless, and lossy in float).
+MAX_ABS_ANGLE = 1000.0
+#: Largest side of a spawned box, metres.
+MAX_BOX_SIZE_M = 50.0
 GROUND_TRUTH = PREFIX + "ground_truth"
 COLLISIONS = PREFIX + "collisions"
 TELEPORT = PREFIX + "teleport"
@@ -44,6 +50,14 @@ class SimHandlers:
 
     def __init__(self, session: Callable[[], Any]) -> None:
         self._session = session
+
+    def _check_position(self, s: SimLoop, req: Any, angle: str) -> None:
+        """x, y inside the scene bounds +- BOUNDS_MARGIN_M and a sane heading, else INVALID_ARGUMENT: a
+        finite but huge value (1e308) would put NaN into MuJoCo's state."""
+        xmin, ymin, xmax, ymax = (float(b) for b in s.sim.scene.bounds)
+        require_range(req, "x", xmin - BOUNDS_MARGIN_M, xmax + BOUNDS_MARGIN_M, " m (scene bounds + margin)")
+        require_range(req, "y", ymin - BOUNDS_MARGIN_M, ymax + BOUNDS_MARGIN_M, " m (scene bounds + margin)")
+        require_range(req, angle, -MAX_ABS_ANGLE, MAX_ABS_ANGLE, " rad")
 
     def _live(self) -> SimLoop:
         """The running sim loop, or FAILED_PRECONDITION before a successful CMD_INIT."""
@@ -73,6 +87,7 @@ class SimHandlers:
         """Place the base at rest at (x, y, theta) in the world frame; refused if it would collide."""
         require_finite(req, "x", "y", "theta")
         s = self._live()
+        self._check_position(s, req, "theta")
         try:
             s.call(lambda sim: sim.teleport(req.x, req.y, req.theta), republish=True)
         except SimConfigError as exc:
@@ -109,7 +124,12 @@ class SimHandlers:
         for name in ("size_x", "size_y"):
             if getattr(req, name) <= 0:
                 raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: must be > 0, got {getattr(req, name)}")
+            require_range(req, name, 0.0, MAX_BOX_SIZE_M, " m")
+        require_len(req, "name", ID_MAX)
+        if any(not (c.isprintable() and not c.isspace()) for c in req.name.strip()):
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"name: {clip(req.name)} has spaces or control characters")
         s = self._live()
+        self._check_position(s, req, "yaw")
         name = req.name.strip() or f"obstacle_{s.spawn_count}"
         try:
             s.call(lambda sim: sim.spawn_box(name, req.x, req.y, req.size_x, req.size_y, req.yaw),

@@ -11,10 +11,14 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+import grpc
+
 from nav2_wrapper.core import GoalRecord
 from nav2_wrapper.core.navigator import FAILED, TERMINAL
 from robonix_api import telemetry
+from robonix_api.grpc_contracts import StatusError
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
+from robonix_api.validation import ID_MAX, require_len
 
 from .goals import parse_goal
 from .loop import NavLoop
@@ -24,6 +28,20 @@ NS = "robonix/service/navigation/"
 NAVIGATE, STATUS, CANCEL = NS + "navigate", NS + "navigate/status", NS + "navigate/cancel"
 ADJUST, SET_LIMIT, GET_LIMIT = NS + "adjust_speed", NS + "set_speed_limit", NS + "get_speed_limit"
 INACTIVE = "inactive: navigation is not active (send CMD_ACTIVATE)"
+#: Goals farther than this from the map origin are refused before planning (no map is that large).
+MAX_ABS_COORD_M = 10_000.0
+
+
+def _check_goal(req: nav_pb.Navigate_Request) -> None:
+    """INVALID_ARGUMENT for a goal no map can hold or an overlong frame id (finite checks stay in parse_goal)."""
+    if req.HasField("goal"):
+        pos = req.goal.pose.position
+        for name in ("x", "y", "z"):
+            v = getattr(pos, name)
+            if math.isfinite(v) and abs(v) > MAX_ABS_COORD_M:
+                raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"goal.pose.position.{name}: must be within "
+                                  f"[-{MAX_ABS_COORD_M:g}, {MAX_ABS_COORD_M:g}] m, got {v:g}")
+        require_len(req.goal.header, "frame_id", ID_MAX)
 
 
 def _r(v: float, nd: int = 3) -> float | None:
@@ -44,6 +62,7 @@ class NavHandlers:
         """Send the robot to goal (geometry_msgs/PoseStamped; frame "map" or empty = map, a unit quaternion
         for the final heading, e.g. w=1 for yaw 0). A new goal preempts the running one. Returns accepted,
         run_id (poll it with the status tool) and a one-line detail, or the reason for rejection."""
+        _check_goal(req)
         loop = self._loop()
         if loop is None:
             return nav_pb.Navigate_Response(accepted=False, detail=self._uninit())
@@ -59,6 +78,8 @@ class NavHandlers:
                                         detail=detail + (f"; preempted {preempted}" if preempted else ""))
 
     def _lookup(self, run_id: str) -> tuple[NavLoop | None, GoalRecord | None, str]:
+        if len(run_id) > ID_MAX:
+            return self._loop(), None, f"run_id: at most {ID_MAX} characters, got {len(run_id)}"
         loop = self._loop()
         if loop is None:
             return None, None, self._uninit()
@@ -80,7 +101,7 @@ class NavHandlers:
         started_s / finished_s (provider clock), speed_limit_percentage. Unknown runs: known=false."""
         loop, rec, why = self._lookup(req.run_id)
         if rec is None or loop is None:
-            return {"known": False, "state": FAILED, "detail": why, "run_id": req.run_id}
+            return {"known": False, "state": FAILED, "detail": why, "run_id": req.run_id[:ID_MAX]}
         x, y, yaw = rec.goal
         left = loop.remaining(rec)
         return {"known": True, "state": rec.state, "detail": rec.detail, "run_id": rec.run_id,
@@ -115,6 +136,8 @@ class NavHandlers:
         """Step the speed limit: direction faster | slower | normal (by dynamic_speed.step_percentage).
         persist=true changes the session limit; otherwise it applies to the running goal (run_id or the
         active one) and reverts when that run ends."""
+        require_len(req, "run_id", ID_MAX)
+        require_len(req, "direction", ID_MAX)
         loop = self._loop()
         if loop is None:
             return nav_pb.AdjustNavigationSpeed_Response(accepted=False, detail=self._uninit())
@@ -126,6 +149,7 @@ class NavHandlers:
     def set_speed_limit(self, req: nav_pb.SetNavigationSpeedLimit_Request) -> nav_pb.SetNavigationSpeedLimit_Response:
         """Set the speed limit as a percentage of max_linear_speed_mps (within [min_percentage, 100]);
         persist=true for the whole session, else for the running goal only."""
+        require_len(req, "run_id", ID_MAX)
         loop = self._loop()
         if loop is None:
             return nav_pb.SetNavigationSpeedLimit_Response(accepted=False, detail=self._uninit())

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ import grpc
 from robonix_api import telemetry
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 from robonix_api.result import Deferred, Err, Ok
+from robonix_api.validation import ERROR_MAX
 
 log = logging.getLogger(__name__)
 
@@ -63,13 +65,47 @@ class Reply:
     error: str = ""
 
     def to_proto(self) -> lifecycle_pb2.Driver_Response:
-        return lifecycle_pb2.Driver_Response(ok=self.ok, state=self.state, error=self.error)
+        error = self.error if len(self.error) <= ERROR_MAX else self.error[: ERROR_MAX - 20] + \
+            f"... ({len(self.error)} chars)"  # a handler's Err may echo a huge config value
+        return lifecycle_pb2.Driver_Response(ok=self.ok, state=self.state, error=error)
+
+
+#: config_json is refused above this size (bytes of UTF-8) or nesting depth, before it is parsed.
+CONFIG_JSON_MAX_BYTES = 1 << 20
+CONFIG_JSON_MAX_DEPTH = 32
+# One left-to-right pass: a string token (possessive, and an unterminated one runs to the end, so the
+# scan never restarts inside it: linear on any input) or a bracket, captured.
+_TOKENS = re.compile(r'"(?:[^"\\]++|\\.)*+"?|([\[\]{}])')
+
+
+def json_depth(text: str) -> int:
+    """Deepest ``[``/``{`` nesting of a JSON text (strings skipped), without recursion: a guard to run
+    before ``json.loads``, whose C parser recurses once per level."""
+    brackets = "".join(_TOKENS.findall(text))
+    depth = deepest = 0
+    for ch in brackets:
+        if ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        else:
+            depth -= 1
+    return deepest
 
 
 def parse_config_json(text: str) -> dict[str, Any]:
-    """robonix rule: empty -> {}, valid non-object JSON -> {}, invalid JSON -> ValueError naming the spot."""
+    """robonix rule: empty -> {}, valid non-object JSON -> {}, invalid JSON -> ValueError naming the spot.
+
+    Bounded: more than :data:`CONFIG_JSON_MAX_BYTES` or nesting deeper than :data:`CONFIG_JSON_MAX_DEPTH`
+    is a ValueError naming ``config_json`` (checked before parsing, so no RecursionError can escape).
+    """
     if not text.strip():
         return {}
+    size = len(text.encode("utf-8", "surrogatepass"))
+    if size > CONFIG_JSON_MAX_BYTES:
+        raise ValueError(f"config_json: at most {CONFIG_JSON_MAX_BYTES} bytes, got {size}")
+    depth = json_depth(text)
+    if depth > CONFIG_JSON_MAX_DEPTH:
+        raise ValueError(f"config_json: nested too deeply ({depth} levels, at most {CONFIG_JSON_MAX_DEPTH})")
     try:
         value = json.loads(text)
     except json.JSONDecodeError as exc:

@@ -12,11 +12,18 @@ from collections.abc import Callable
 from typing import Any
 
 import grpc
+from google.protobuf.descriptor import FieldDescriptor
+from google.protobuf.message import Message
 
 from robonix_api.contracts import ContractSpec
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc
 
 log = logging.getLogger(__name__)
+#: A status message is cut to this length (an error must not echo unbounded input).
+MESSAGE_MAX = 1024
+#: Any string field of a request longer than this is refused before the handler runs (handlers cap
+#: their own fields tighter: ids 64, notes 4096).
+STRING_FIELD_MAX = 64 * 1024
 
 
 class StatusError(Exception):
@@ -24,6 +31,8 @@ class StatusError(Exception):
     the field); over MCP it becomes a tool error carrying the same message."""
 
     def __init__(self, code: grpc.StatusCode, message: str) -> None:
+        if len(message) > MESSAGE_MAX:  # never overrun gRPC's metadata limit with echoed input
+            message = message[: MESSAGE_MAX - 20] + f"... ({len(message)} chars)"
         super().__init__(message)
         self.code = code
         self.message = message
@@ -64,6 +73,7 @@ def build_servicer(spec: ContractSpec, fn: Callable[..., Any]) -> Any:
 
     def method(self: Any, request: Any, context: grpc.ServicerContext) -> Any:
         try:
+            check_strings(request)
             return invoke(fn, request, context)
         except StatusError as exc:
             context.abort(exc.code, exc.message)
@@ -71,10 +81,28 @@ def build_servicer(spec: ContractSpec, fn: Callable[..., Any]) -> Any:
             if _is_abort(exc):  # context.abort() inside the handler: already a status
                 raise
             log.exception("handler for %s raised", cid)
-            context.abort(grpc.StatusCode.INTERNAL, f"{cid}: {type(exc).__name__}: {exc}")
+            context.abort(grpc.StatusCode.INTERNAL, StatusError(grpc.StatusCode.INTERNAL,
+                                                                f"{cid}: {type(exc).__name__}: {exc}").message)
 
     cls = type(f"{spec.service_name}Handler", (base,), {spec.method_name: method})
     return cls()
+
+
+def check_strings(request: Any, limit: int = STRING_FIELD_MAX, prefix: str = "", depth: int = 0) -> None:
+    """StatusError(INVALID_ARGUMENT) naming the first string field (nested messages too) over ``limit``."""
+    if not isinstance(request, Message) or depth > 8:
+        return
+    for field, value in request.ListFields():
+        name = prefix + field.name
+        items = value if field.is_repeated else [value]
+        if field.type == FieldDescriptor.TYPE_STRING:
+            for v in items:
+                if len(v) > limit:
+                    raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: at most {limit} characters, "
+                                                                        f"got {len(v)}")
+        elif field.type == FieldDescriptor.TYPE_MESSAGE and not field.message_type.GetOptions().map_entry:
+            for v in items:
+                check_strings(v, limit, name + ".", depth + 1)
 
 
 def _is_abort(exc: Exception) -> bool:

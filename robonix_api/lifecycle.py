@@ -49,10 +49,15 @@ def parse_cfg(request: Any) -> dict[str, Any]:
     text = (getattr(request, "config_json", "") or "").strip()
     if not text:
         return {}
+    from robonix_api.driver import CONFIG_JSON_MAX_BYTES, CONFIG_JSON_MAX_DEPTH, json_depth
+
+    if len(text) > CONFIG_JSON_MAX_BYTES or json_depth(text) > CONFIG_JSON_MAX_DEPTH:
+        raise ValueError(f"bad config_json: larger than {CONFIG_JSON_MAX_BYTES} bytes or nested deeper than "
+                         f"{CONFIG_JSON_MAX_DEPTH} levels")
     try:
         value = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"bad config_json: {exc}") from exc
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(f"bad config_json: {str(exc)[:200]}") from None
     return value if isinstance(value, dict) else {}
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import json
 import logging
+import math
+import os
 import socket
 import threading
 import time
@@ -25,12 +27,42 @@ from mcp.server import Server
 from mcp.shared.exceptions import MCPError
 
 from robonix_api.contracts import ContractSpec
-from robonix_api.grpc_contracts import StatusError, invoke
+from robonix_api.grpc_contracts import MESSAGE_MAX, StatusError, check_strings, invoke
 from robonix_api.mcp_tools import MCP_PATH, tool_shape
 from robonix_api.netutil import bind_listener
 from robonix_api.tool import build_input, wire_output_for_json
 
 log = logging.getLogger(__name__)
+
+#: A session with no request for this long is closed (its memory released); override with
+#: ``ROBONIX_MCP_SESSION_IDLE_S``.
+DEFAULT_SESSION_IDLE_S = 300.0
+#: At most this many sessions per server; more initialize calls answer HTTP 503 until one closes or
+#: idles out. Override with ``ROBONIX_MCP_MAX_SESSIONS``.
+DEFAULT_MAX_SESSIONS = 100
+
+
+def session_limits() -> dict[str, Any]:
+    """Keyword arguments for ``streamable_http_app``: idle expiry and a per-server session cap, so a
+    flood of ``initialize`` calls cannot grow a server's memory without bound. A bad environment value
+    falls back to the default with a warning (a limit must never be switched off by a typo)."""
+    idle = _env_number("ROBONIX_MCP_SESSION_IDLE_S", DEFAULT_SESSION_IDLE_S, float)
+    cap = _env_number("ROBONIX_MCP_MAX_SESSIONS", DEFAULT_MAX_SESSIONS, int)
+    return {"session_idle_timeout": idle, "max_sessions": cap}
+
+
+def _env_number(name: str, default: Any, kind: type) -> Any:
+    raw = os.environ.get(name, "").strip()
+    if not raw:
+        return default
+    try:
+        value = kind(raw)
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value) or value <= 0:
+        log.warning("%s=%r is not a positive number; using %s", name, raw[:40], default)
+        return default
+    return value
 
 
 @dataclass
@@ -60,6 +92,7 @@ class McpTool:
         except (json_format.ParseError, TypeError, ValueError, KeyError) as exc:
             return _tool_error(f"invalid arguments for tool {self.name}: {exc}")
         try:
+            check_strings(request)
             response = invoke(self.handler, request, None)
         except StatusError as exc:
             return _tool_error(f"{self.name}: {exc}")
@@ -77,6 +110,8 @@ class McpTool:
 
 
 def _tool_error(text: str) -> types.CallToolResult:
+    if len(text) > MESSAGE_MAX:  # never echo unbounded input back
+        text = text[: MESSAGE_MAX - 20] + f"... ({len(text)} chars)"
     return types.CallToolResult(content=[types.TextContent(type="text", text=text)], is_error=True)
 
 
@@ -112,7 +147,7 @@ class McpToolServer:
     def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> int:
         """Serve in a daemon thread (on ``sock`` if given, else on port 0 of the host); return the port
         once accepting."""
-        app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host)
+        app = self._mcp.streamable_http_app(streamable_http_path=MCP_PATH, host=self._host, **session_limits())
         self._asgi = AsgiServer(app, host=self._host)
         self.port = self._asgi.start(timeout_s, sock=sock)
         return self.port

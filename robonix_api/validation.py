@@ -56,6 +56,41 @@ def per_role(name: str, roles: tuple[str, ...], value_type: Any = str, *, doc: s
     return model
 
 
+#: Echoed user input in an error is cut to this many characters; a whole status message to ERROR_MAX.
+ECHO_MAX = 80
+ERROR_MAX = 1024
+#: Ids (map, run, obstacle, provider names) and free-text notes are capped at these lengths.
+ID_MAX = 64
+NOTE_MAX = 4096
+
+
+def clip(value: Any, limit: int = ECHO_MAX) -> str:
+    """``repr(value)`` cut to ``limit`` characters (plus the original length), for echoing input in errors."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(str(value))} chars)"
+
+
+def clip_message(text: str, limit: int = ERROR_MAX) -> str:
+    """An error message cut to ``limit`` characters, so a status never overruns gRPC's metadata limit."""
+    return text if len(text) <= limit else text[: limit - 20] + f"... ({len(text)} chars)"
+
+
+def require_range(req: Any, name: str, lo: float, hi: float, unit: str = "") -> None:
+    """INVALID_ARGUMENT ``name: must be within [lo, hi]`` for a finite number outside that range."""
+    v = getattr(req, name)
+    if not math.isfinite(v) or not lo <= v <= hi:
+        raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                          f"{name}: must be a finite number within [{lo:g}, {hi:g}]{unit}, got {v:g}")
+
+
+def require_len(req: Any, name: str, limit: int = ID_MAX) -> str:
+    """The string field ``name``, or INVALID_ARGUMENT when it is longer than ``limit`` characters."""
+    v = getattr(req, name)
+    if len(v) > limit:
+        raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: at most {limit} characters, got {len(v)}")
+    return v
+
+
 def require_finite(req: Any, *names: str) -> None:
     """StatusError(INVALID_ARGUMENT, "<name>: must be a finite number, got <v>") for NaN or ±inf."""
     for name in names:
@@ -64,4 +99,5 @@ def require_finite(req: Any, *names: str) -> None:
             raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"{name}: must be a finite number, got {v}")
 
 
-__all__ = ["Seconds", "field_errors", "finite", "per_role", "require_finite"]
+__all__ = ["ECHO_MAX", "ERROR_MAX", "ID_MAX", "NOTE_MAX", "Seconds", "clip", "clip_message", "field_errors", "finite",
+           "per_role", "require_finite", "require_len", "require_range"]

@@ -17,7 +17,7 @@ import grpc
 
 from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
-from robonix_api.validation import require_finite
+from robonix_api.validation import require_finite, require_range
 from slam_service.core import SlamEngine, render_map_png
 from slam_service.map_paths import check_note, clip
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
@@ -26,6 +26,16 @@ log = logging.getLogger("slam_service.handlers")
 NS = "robonix/service/map/"
 NOT_INIT = "not initialized (send CMD_INIT)"
 MODES = ("mapping", "localization")
+#: A map-frame pose beyond this many metres from the origin (or a heading beyond MAX_ABS_ANGLE rad) is refused.
+MAX_ABS_COORD_M = 10_000.0
+MAX_ABS_ANGLE = 1000.0
+
+
+def _pose_in_range(req: Any) -> None:
+    require_finite(req, "x", "y", "theta")
+    for name in ("x", "y"):
+        require_range(req, name, -MAX_ABS_COORD_M, MAX_ABS_COORD_M, " m")
+    require_range(req, "theta", -MAX_ABS_ANGLE, MAX_ABS_ANGLE, " rad")
 
 
 def _map_id(map_id: str) -> str:
@@ -87,7 +97,7 @@ class MapHandlers:
         if mode not in MODES:
             raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
         if req.has_initial_pose:
-            require_finite(req, "x", "y", "theta")
+            _pose_in_range(req)
         s = self._session()
         if s is None:
             return map_pb2.LoadMap_Response(ok=False, detail=NOT_INIT)
@@ -171,7 +181,7 @@ class MapHandlers:
 
     def pose_estimate(self, req: map_pb2.PoseEstimate_Request) -> map_pb2.PoseEstimate_Response:
         """Set the robot's map-frame pose (applied at the next scan), e.g. to relocalize."""
-        require_finite(req, "x", "y", "theta")
+        _pose_in_range(req)
         s = self._session()
         if s is None:
             return map_pb2.PoseEstimate_Response(ok=False, detail=NOT_INIT)

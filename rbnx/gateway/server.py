@@ -36,7 +36,7 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
-from robonix_api.mcp_server import AsgiServer
+from robonix_api.mcp_server import AsgiServer, session_limits
 from robonix_api.mcp_tools import MCP_PATH
 from robonix_api.proto_gen import atlas_pb2
 
@@ -123,7 +123,7 @@ class Gateway:
     # ------------------------------------------------------------------ serving
     def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> str:
         """Serve (on ``sock`` when given: a socket bound and listening already); returns the URL."""
-        app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host)
+        app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host, **session_limits())
         self._http = AsgiServer(app, host=self.host, name="mcp-gateway")
         port = self._http.start(timeout_s, sock=sock)
         self.url = f"http://{self.host}:{port}{MCP_PATH}"

@@ -160,7 +160,7 @@ def test_save_list_and_localize_on_saved_map(env: Env) -> None:
     save = env.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="room1", note="test room"), timeout=60)
     assert save.ok and save.map_id == "room1", save.detail
     folder = env.map_dir / "room1"
-    assert {p.name for p in folder.iterdir()} == {"map.yaml", "map.pgm", "session.npz", "meta.json"}
+    assert {p.name for p in folder.iterdir()} == {"map.yaml", "map.pgm", "session.npz", "meta.json", ".robonix-map"}
     grid = load_map_yaml(folder / "map.yaml")
     assert grid.width > 50 and np.count_nonzero(grid.data == 100) > 100
     listed = json.loads(env.rpc("list_maps").ListMaps(map_pb2.ListMaps_Request(), timeout=30).maps_json)

@@ -1,0 +1,104 @@
+"""The map store's boundary through a real SLAM provider (gRPC + Driver), next to a real HAL: a map_dir
+outside the maps root, delete_map on a folder the store did not write, a 3.9 MB note and a 1 MB map id,
+``"ok\\n"`` as a map id, out-of-range poses. Each is refused naming the field; no file outside the maps
+root changes; list_maps keeps working for everyone."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import grpc
+import pytest
+from support.procs import ACTIVATE, DEACTIVATE, HAL, INIT, SLAM, Proc, wait_until
+
+from robonix_api.proto_gen import map_pb2
+from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
+
+from .scene import HAL_CONFIG
+
+pytestmark = pytest.mark.integration
+M = "robonix/service/map/"
+
+
+class Slam:
+    def __init__(self, proc: Proc, map_dir: Path) -> None:
+        self.proc, self.map_dir = proc, map_dir
+        self._stubs: dict[str, object] = {}
+
+    def rpc(self, name: str) -> object:
+        if name not in self._stubs:
+            cls = getattr(rpc, "RobonixServiceMap" + "".join(w.title() for w in name.split("_")) + "Stub")
+            self._stubs[name] = self.proc.stub(M + name, cls)
+        return self._stubs[name]
+
+
+@pytest.fixture(scope="module")
+def slam(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory) -> Iterator[Slam]:
+    root = Path(os.environ["ROBONIX_MAPS_ROOT"])
+    map_dir = tmp_path_factory.mktemp("trust_maps")
+    assert map_dir.resolve().is_relative_to(root.resolve())
+    hal = procs(HAL, "trust_sim")
+    assert hal.driver(INIT, HAL_CONFIG) == (True, "inactive", "")
+    assert hal.driver(ACTIVATE) == (True, "active", "")
+    p = procs(SLAM, "trust_mapping")
+    assert p.init({"map_dir": str(map_dir)}, 60) == (True, "inactive", ""), p.log()[-3000:]
+    assert p.driver(ACTIVATE) == (True, "active", "")
+    yield Slam(p, map_dir)
+    assert p.proc.poll() is None and "Traceback" not in p.log(), p.log()[-3000:]
+
+
+def test_map_dir_outside_the_maps_root_is_refused(slam: Slam, tmp_path_factory: pytest.TempPathFactory) -> None:
+    outside = Path(os.path.realpath(os.environ["ROBONIX_MAPS_ROOT"])).parent / f"trust-outside-{os.getpid()}"
+    assert slam.proc.driver(DEACTIVATE) == (True, "inactive", "")  # INIT is only taken while not ACTIVE
+    for bad in (str(outside), "/", "/etc", str(slam.map_dir / ".." / ".." / "..")):
+        ok, state, err = slam.proc.driver(INIT, {"map_dir": bad})
+        assert not ok and err.startswith("map_dir: ") and "outside the maps root" in err, (bad, state, err)
+    assert not outside.exists()
+    # a refused INIT is an Err (state ERROR, as robonix does); a good one brings the service back
+    assert slam.proc.driver(INIT, {"map_dir": str(slam.map_dir)}) == (True, "inactive", "")
+    assert slam.proc.driver(ACTIVATE) == (True, "active", "")
+    saved = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="kept"), timeout=60)
+    assert saved.ok and (slam.map_dir / "kept" / ".robonix-map").is_file(), saved.detail
+
+
+def test_delete_map_spares_folders_the_store_did_not_write(slam: Slam) -> None:
+    precious = slam.map_dir / "precious"
+    precious.mkdir()
+    (precious / "thesis.txt").write_text("years of work")
+    r = slam.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="precious"), timeout=30)
+    assert not r.ok and "marker" in r.detail and (precious / "thesis.txt").read_text() == "years of work", r.detail
+    saved = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="precious"), timeout=60)
+    assert not saved.ok and "marker" in saved.detail and (precious / "thesis.txt").is_file(), saved.detail
+    ok = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="scratch"), timeout=60)
+    assert ok.ok, ok.detail
+    r = slam.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="scratch"), timeout=30)
+    assert r.ok and not (slam.map_dir / "scratch").exists(), r.detail
+
+
+@pytest.mark.parametrize(("map_id", "note", "field"), [
+    ("big_note", "n" * 3_900_000, "note"),
+    ("x" * 1_000_000, "", "map_id"),
+    ("ok\n", "", "map_id"),
+    ("a" * 65, "", "map_id"),
+])
+def test_oversized_and_malformed_names_are_refused_briefly(slam: Slam, map_id: str, note: str, field: str) -> None:
+    with pytest.raises(grpc.RpcError) as info:
+        slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id=map_id, note=note), timeout=60)
+    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value
+    details = info.value.details() or ""
+    assert details.startswith(field + ":") and len(details) <= 1024, details[:300]
+    assert not any("\n" in p.name for p in slam.map_dir.iterdir())
+    listed = slam.rpc("list_maps").ListMaps(map_pb2.ListMaps_Request(), timeout=30)
+    assert listed.ok and all(len(m["note"]) <= 4096 for m in json.loads(listed.maps_json))
+
+
+def test_poses_out_of_range_are_refused(slam: Slam) -> None:
+    for req, field in ((map_pb2.PoseEstimate_Request(x=1e308, y=0), "x"),
+                       (map_pb2.PoseEstimate_Request(x=0, y=0, theta=-1e308), "theta")):
+        with pytest.raises(grpc.RpcError) as info:
+            slam.rpc("pose_estimate").PoseEstimate(req, timeout=30)
+        assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT and info.value.details().startswith(field + ":")
+    wait_until(lambda: slam.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).ok, 30, "SLAM answering")
