@@ -19,7 +19,7 @@ pytestmark = pytest.mark.integration
 TOOL = "robonix/service/map/get_mode"
 INIT = json.dumps({"jsonrpc": "2.0", "id": 1, "method": "initialize",
                    "params": {"protocolVersion": "2025-06-18", "capabilities": {},
-                              "clientInfo": {"name": "flood", "version": "1"}}})
+                              "clientInfo": {"name": "flood", "version": "1"}}}).encode()  # one send(): no Nagle wait
 
 
 def test_session_limits_defaults_and_env(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -36,24 +36,25 @@ def test_session_limits_defaults_and_env(monkeypatch: pytest.MonkeyPatch) -> Non
 
 
 class McpHttp:
-    """Raw streamable-HTTP requests on one keep-alive connection (what a flooding client would send)."""
+    """Raw streamable-HTTP ``initialize`` requests, one connection each (what a flooding client sends;
+    a fresh connection also avoids a delayed-ACK stall of ~40 ms per request on a kept-alive one)."""
 
     def __init__(self, url: str) -> None:
         parts = urlsplit(url)
         self.host, self.port, self.path = parts.hostname or "127.0.0.1", parts.port or 80, parts.path
-        self.conn = http.client.HTTPConnection(self.host, self.port, timeout=60)
 
     def initialize(self) -> tuple[int, str]:
         """(HTTP status, session id or "")."""
-        self.conn.request("POST", self.path, body=INIT, headers={
-            "Content-Type": "application/json", "Accept": "application/json, text/event-stream",
-            "Host": f"127.0.0.1:{self.port}"})
-        resp = self.conn.getresponse()
-        resp.read()
-        return resp.status, resp.getheader("mcp-session-id") or ""
-
-    def close(self) -> None:
-        self.conn.close()
+        conn = http.client.HTTPConnection(self.host, self.port, timeout=60)
+        try:
+            conn.request("POST", self.path, body=INIT, headers={
+                "Content-Type": "application/json", "Accept": "application/json, text/event-stream",
+                "Host": f"127.0.0.1:{self.port}"})
+            resp = conn.getresponse()
+            resp.read()
+            return resp.status, resp.getheader("mcp-session-id") or ""
+        finally:
+            conn.close()
 
 
 def _rss_kb(pid: int) -> int:
@@ -70,19 +71,16 @@ def _mcp_url(p: Proc) -> str:
 def test_initialize_flood_is_capped_and_memory_returns(procs: Callable[..., Proc]) -> None:
     slam = procs(SLAM, "mapping_flood", ROBONIX_MCP_PRELOAD_S="0")
     client = McpHttp(_mcp_url(slam))
-    try:
-        # warm up: the stack loaded and the first sessions' code paths run, then the baseline
-        assert client.initialize()[0] == 200
-        warm = [client.initialize() for _ in range(20)]
-        assert all(status == 200 and sid for status, sid in warm), warm
-        before = _rss_kb(slam.proc.pid)
-        statuses: dict[int, int] = {}
-        for _ in range(3000):
-            status, _ = client.initialize()
-            statuses[status] = statuses.get(status, 0) + 1
-        after = _rss_kb(slam.proc.pid)
-    finally:
-        client.close()
+    # warm up: the stack loaded and the first sessions' code paths run, then the baseline
+    assert client.initialize()[0] == 200
+    warm = [client.initialize() for _ in range(20)]
+    assert all(status == 200 and sid for status, sid in warm), warm
+    before = _rss_kb(slam.proc.pid)
+    statuses: dict[int, int] = {}
+    for _ in range(3000):
+        status, _ = client.initialize()
+        statuses[status] = statuses.get(status, 0) + 1
+    after = _rss_kb(slam.proc.pid)
     print(f"3000 initialize calls: {statuses}; RSS {before / 1024:.1f} -> {after / 1024:.1f} MiB")
     # 21 sessions were open before: the cap of 100 admits 79 more, the rest are refused
     assert statuses == {200: DEFAULT_MAX_SESSIONS - 21, 503: 3000 - (DEFAULT_MAX_SESSIONS - 21)}, statuses
@@ -94,12 +92,9 @@ def test_idle_sessions_expire_and_free_their_slot(procs: Callable[..., Proc]) ->
     slam = procs(SLAM, "mapping_idle", ROBONIX_MCP_PRELOAD_S="0", ROBONIX_MCP_SESSION_IDLE_S="2",
                  ROBONIX_MCP_MAX_SESSIONS="3")
     client = McpHttp(_mcp_url(slam))
-    try:
-        opened = [client.initialize() for _ in range(3)]
-        assert all(status == 200 for status, _ in opened), opened
-        assert client.initialize()[0] == 503  # the cap
-        # no request on those sessions: after the idle timeout they close and a new client gets in
-        wait_until(lambda: client.initialize()[0] == 200, 60, "an idle session to expire", 0.5)
-    finally:
-        client.close()
+    opened = [client.initialize() for _ in range(3)]
+    assert all(status == 200 for status, _ in opened), opened
+    assert client.initialize()[0] == 503  # the cap
+    # no request on those sessions: after the idle timeout they close and a new client gets in
+    wait_until(lambda: client.initialize()[0] == 200, 60, "an idle session to expire", 0.5)
     assert slam.proc.poll() is None
