@@ -52,6 +52,8 @@ class RegistryError(Exception):
     """A request the registry refuses; ``code`` is a ``grpc.StatusCode`` name."""
 
     def __init__(self, code: str, message: str) -> None:
+        if len(message) > 1024:  # a status must not echo unbounded input (ids are not length-capped here)
+            message = message[:1004] + f"... ({len(message)} chars)"
         super().__init__(f"{code}: {message}")
         self.code = code
         self.message = message
