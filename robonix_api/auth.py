@@ -209,3 +209,29 @@ __all__ = [
     "token_from_metadata",
     "token_matches",
 ]
+
+
+# --------------------------------------------------------------------------- MCP client side
+
+
+def mcp_client(url: str, **kwargs: Any) -> Any:
+    """An official MCP ``Client`` for ``url`` that sends this process's token as ``Authorization:
+    Bearer`` (a plain ``Client(url)`` without one). Use as ``async with mcp_client(url) as c:``."""
+    from contextlib import asynccontextmanager
+
+    from mcp import Client
+
+    headers = http_headers()
+    if not headers:
+        return Client(url, **kwargs)
+
+    @asynccontextmanager
+    async def _with_headers() -> Any:
+        from mcp.client.streamable_http import streamable_http_client
+        from mcp.shared._httpx_utils import create_mcp_http_client
+
+        async with create_mcp_http_client(headers=headers) as http:
+            async with Client(streamable_http_client(url, http_client=http), **kwargs) as client:
+                yield client
+
+    return _with_headers()
