@@ -119,7 +119,10 @@ class AtlasSystem(BaseModel):
     def _hosts_ok(cls, v: list[str]) -> list[str]:
         from atlas.trust import parse_allowed_hosts
 
-        return list(parse_allowed_hosts(v))
+        try:
+            return list(parse_allowed_hosts(v))
+        except ValueError as exc:  # the field is named by the caller already
+            raise ValueError(str(exc).removeprefix("allowed_hosts: ")) from None
 
     @field_validator("listen")
     @classmethod

@@ -17,8 +17,10 @@ TOKEN = "trust-test-token-0123456789abcdef"
 
 @pytest.fixture(autouse=True)
 def _no_ambient_token(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Each test decides itself whether this process holds the token."""
-    monkeypatch.delenv(TOKEN_ENV, raising=False)
+    """Each test decides itself whether this process holds the token; whatever it sets is undone after
+    (setenv first, so monkeypatch records the variable and restores it even when it was absent)."""
+    monkeypatch.setenv(TOKEN_ENV, "placeholder")
+    monkeypatch.delenv(TOKEN_ENV)
 
 
 @pytest.fixture
