@@ -156,13 +156,15 @@ _NO_TOKEN = frozenset({"boot", "deploy", "demo", "validate", "init", "build", "t
 
 
 def _adopt_token(args: argparse.Namespace) -> None:
-    """Take the deployment token of the boot this command talks to (its state file), unless
-    $ROBONIX_DEPLOY_TOKEN is set already; the SDK's clients then send it."""
+    """Take the deployment token of the boot this command talks to (its state file; else an exported
+    $ROBONIX_DEPLOY_TOKEN); the SDK's clients then send it."""
     if args.cmd in _NO_TOKEN:
         return
     from rbnx import deploytoken
 
-    if deploytoken.adopt_for(getattr(args, "endpoint", None) or args.atlas):
+    token = deploytoken.token_for_atlas(getattr(args, "endpoint", None) or args.atlas)
+    if token:
+        deploytoken.adopt(token)
         return
     path = getattr(args, "file", None)
     if path and args.cmd in ("shutdown", "lifecycle", "logs", "dashboard"):
@@ -172,9 +174,11 @@ def _adopt_token(args: argparse.Namespace) -> None:
         from rbnx.statefile import read_state
 
         try:
-            deploytoken.adopt(deploytoken.token_of_state(read_state(locate_state(Path(path), args.atlas))))
+            token = deploytoken.token_of_state(read_state(locate_state(Path(path), args.atlas)))
         except (StateNotFound, OSError, ValueError):
-            pass  # the command reports a missing boot in its own words
+            return  # the command reports a missing boot in its own words
+        if token:
+            deploytoken.adopt(token)
 
 
 def main(argv: list[str] | None = None) -> int:

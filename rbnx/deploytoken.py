@@ -3,8 +3,8 @@
 ``rbnx boot`` draws a fresh random token per deployment, records it in the boot state file (mode 0600,
 so only the same user can read it) and hands it to the atlas and every child as ``$ROBONIX_DEPLOY_TOKEN``.
 The other commands (``rbnx navigate``, ``rbnx lifecycle``, ``rbnx map-card``, …) look it up in the state
-file of the deployment whose atlas they talk to and put it into their own environment, where the SDK's
-clients pick it up; so the README's commands work unchanged. ``rbnx token`` prints it for agents.
+file of the deployment whose atlas they talk to (else they use an exported ``$ROBONIX_DEPLOY_TOKEN``) and
+put it into their own environment, where the SDK's clients pick it up; so the README's commands work unchanged. ``rbnx token`` prints it for agents.
 """
 
 from __future__ import annotations
@@ -76,15 +76,13 @@ def token_of_state(state: Mapping[str, Any] | None) -> str:
 
 
 def adopt_for(atlas: str) -> str:
-    """Unless ``$ROBONIX_DEPLOY_TOKEN`` is set already, take the token of the boot serving ``atlas``;
-    returns the token in effect ("" for a deployment without one)."""
-    current = os.environ.get(TOKEN_ENV, "").strip()
-    if current:
-        return current
+    """Take the token the boot serving ``atlas`` recorded (it wins over a stale exported one); without a
+    record keep ``$ROBONIX_DEPLOY_TOKEN`` (an atlas booted elsewhere). Returns the token in effect."""
     token = token_for_atlas(atlas)
     if token:
         adopt(token)
-    return token
+        return token
+    return os.environ.get(TOKEN_ENV, "").strip()
 
 
 __all__ = ["ALLOWED_HOSTS_ENV", "TOKEN_ENV", "adopt", "adopt_for", "boot_env", "new_token", "token_for_atlas",
