@@ -130,6 +130,7 @@ class Deployment:
         self.url = m.group(1)
         self.state = boot.state()
         assert self.state["gateway"] == self.url
+        boot.adopt_token()  # the agent holds the deployment token (`rbnx token`), as the README says
 
 
 @pytest.fixture(scope="module")
