@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 from hal_panda_mobile.config import HalConfig
 from nav2_wrapper.config import ProviderConfig as NavConfig
+from robonix_api import auth
 from robonix_api.proto_gen import lifecycle_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 from slam_service.config import ProviderConfig as SlamConfig
@@ -34,28 +35,32 @@ SLOW: list[str] = []
 COMMANDS = st.one_of(st.sampled_from([INIT, INIT, ACTIVATE, DEACTIVATE]), st.integers(0, 2**32 - 1).filter(lambda c: c != 3))
 
 
-def drive(stub: Any, command: int, config_json: str) -> tuple[Any, str]:
-    """(response or None, error details)."""
+def drive(stub: Any, command: int, config_json: str, with_token: bool = True) -> tuple[Any, str]:
+    """(response or None, error details); without the token the Driver must refuse (and nothing else)."""
     try:
-        return stub.Driver(lifecycle_pb2.Driver_Request(command=command, config_json=config_json), timeout=120), ""
+        return stub.Driver(lifecycle_pb2.Driver_Request(command=command, config_json=config_json), timeout=120,
+                           metadata=auth.metadata() if with_token else None), ""
     except grpc.RpcError as exc:
-        assert exc.code() == grpc.StatusCode.INVALID_ARGUMENT, f"{exc.code().name}: {(exc.details() or '')[:300]}"
+        expected = grpc.StatusCode.INVALID_ARGUMENT if with_token else grpc.StatusCode.UNAUTHENTICATED
+        assert exc.code() == expected, f"{exc.code().name}: {(exc.details() or '')[:300]}"
         return None, exc.details() or ""
 
 
 def fuzz_driver(dep: Deployment, provider: str, stub: Any) -> None:
     @EXAMPLES
-    @given(command=COMMANDS, config_json=config_json_texts(KEYS[provider] + [str(dep.bait), "../bait"]))
-    def run(command: int, config_json: str) -> None:
+    @given(command=COMMANDS, config_json=config_json_texts(KEYS[provider] + [str(dep.bait), "../bait"]),
+           with_token=st.sampled_from([True, True, True, False]))
+    def run(command: int, config_json: str, with_token: bool) -> None:
         dep.count(f"Driver {provider}")
         t0 = time.monotonic()
-        resp, details = drive(stub, command, config_json)
+        resp, details = drive(stub, command, config_json, with_token)
         took = time.monotonic() - t0
         if took > 2.0:  # a diagnosis aid: which input made a Driver call slow
             SLOW.append(f"{provider} {took:.1f} s: command {command}, config_json {config_json[:120]!r} -> "
                         f"{(resp.state, resp.error[:200]) if resp else details[:200]}")
         if resp is None:
-            assert details.startswith("config_json") and len(details) <= 1024, details[:300]
+            assert details and len(details) <= 1024, details[:300]
+            assert details.startswith("config_json") or not with_token, details[:300]
         else:
             assert resp.state and len(resp.error) <= 1024, (resp.state, resp.error[:300])
 

@@ -1,5 +1,6 @@
 """Property-based abuse of every unary gRPC contract the deployment serves and of every atlas RPC:
-hypothesis fills every field of each request message with hostile values. Every reply must be a valid
+hypothesis fills every field of each request message with hostile values, mostly sent with the
+deployment's token (as a legitimate client would) and sometimes without. Every reply must be a valid
 response or a clear status (a client-error code, a message of at most 1024 characters); never INTERNAL,
 UNKNOWN or a dead server."""
 
@@ -13,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from robonix_api import auth
 from robonix_api.contracts import load_catalogue
 from robonix_api.proto_gen import atlas_pb2, robonix_contracts_pb2
 
@@ -25,6 +27,8 @@ CLEAR = {grpc.StatusCode.INVALID_ARGUMENT, grpc.StatusCode.FAILED_PRECONDITION, 
          grpc.StatusCode.ALREADY_EXISTS, grpc.StatusCode.OUT_OF_RANGE, grpc.StatusCode.PERMISSION_DENIED,
          grpc.StatusCode.UNAUTHENTICATED, grpc.StatusCode.RESOURCE_EXHAUSTED, grpc.StatusCode.UNIMPLEMENTED}
 SKIP = {"robonix/lifecycle/driver"}  # driven in test_abuse_driver (commands change the provider's state)
+#: Mostly as a token holder (so the handlers behind the token check are exercised), sometimes without.
+WITH_TOKEN = st.sampled_from([True, True, True, False])
 EXAMPLES = settings(max_examples=60, deadline=None, derandomize=True, database=None,
                     suppress_health_check=list(HealthCheck))
 
@@ -34,9 +38,9 @@ def _call(channel: grpc.Channel, path: str, req_cls: Any, resp_cls: Any) -> Call
                                response_deserializer=resp_cls.FromString)
 
 
-def check_reply(fn: Callable[[Any], Any], req: Any, what: str) -> None:
+def check_reply(fn: Callable[[Any], Any], req: Any, what: str, with_token: bool = True) -> None:
     try:
-        fn(req, timeout=60)
+        fn(req, timeout=60, metadata=auth.metadata() if with_token else None)
     except grpc.RpcError as exc:
         code, details = exc.code(), exc.details() or ""
         assert code in CLEAR, f"{what}: {code.name}: {details[:500]}"
@@ -47,10 +51,10 @@ def fuzz(dep: Deployment, strategy: st.SearchStrategy[Any], fn: Callable[[Any], 
     """Run ``fn`` on hypothesis-drawn requests and check every reply."""
 
     @EXAMPLES
-    @given(req=strategy)
-    def run(req: Any) -> None:
+    @given(req=strategy, with_token=WITH_TOKEN)
+    def run(req: Any, with_token: bool) -> None:
         dep.count(label)
-        check_reply(fn, req, label)
+        check_reply(fn, req, label, with_token)
 
     run()
 

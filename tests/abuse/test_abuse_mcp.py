@@ -12,6 +12,9 @@ from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from robonix_api import auth
 
 from .deployment import Deployment
 from .strategies import schema_value
@@ -25,7 +28,8 @@ class McpActor:
     """One MCP client session held open by a task on a background event loop; ``call`` is synchronous
     (hypothesis drives examples from this thread, the session lives in its own task)."""
 
-    def __init__(self, url: str) -> None:
+    def __init__(self, url: str, with_token: bool) -> None:
+        self.with_token = with_token
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self.loop.run_forever, name="mcp-actor", daemon=True)
         self._thread.start()
@@ -40,7 +44,7 @@ class McpActor:
 
         self._inbox = asyncio.Queue()
         try:
-            async with Client(url) as client:
+            async with (auth.mcp_client(url) if self.with_token else Client(url)) as client:
                 ready.set_result((await client.list_tools()).tools)
                 while (item := await self._inbox.get()) is not None:
                     name, args, fut = item
@@ -73,17 +77,20 @@ class McpActor:
 
 
 @pytest.fixture(scope="module")
-def actors(deployment: Deployment) -> Iterator[dict[str, McpActor]]:
+def actors(deployment: Deployment) -> Iterator[dict[str, tuple[McpActor, McpActor]]]:
+    """Per provider: a session holding the deployment's token, and one without."""
+    assert auth.current_token(), "the deployment's token was not adopted"
     urls: dict[str, str] = {}
     for provider, contract in deployment.capabilities("mcp"):
         urls.setdefault(provider, deployment.endpoint(provider, contract, "mcp"))
     assert set(urls) == set(deployment.pids), urls
-    out = {provider: McpActor(url) for provider, url in urls.items()}
+    out = {provider: (McpActor(url, True), McpActor(url, False)) for provider, url in urls.items()}
     try:
         yield out
     finally:
-        for actor in out.values():
-            actor.close()
+        for pair in out.values():
+            for actor in pair:
+                actor.close()
 
 
 def check_reply(kind: str, value: Any, what: str) -> None:
@@ -98,10 +105,12 @@ def check_reply(kind: str, value: Any, what: str) -> None:
         assert isinstance(value.structured_content, dict), f"{what}: no structured result: {texts[:1]!r:.300}"
 
 
-def fuzz_tool(dep: Deployment, actor: McpActor, label: str, name: str, schema: dict[str, Any]) -> None:
+def fuzz_tool(dep: Deployment, pair: tuple[McpActor, McpActor], label: str, name: str,
+              schema: dict[str, Any]) -> None:
     @EXAMPLES
-    @given(args=schema_value({**schema, "type": "object"}).filter(lambda a: isinstance(a, dict)))
-    def run(args: dict[str, Any]) -> None:
+    @given(args=schema_value({**schema, "type": "object"}).filter(lambda a: isinstance(a, dict)),
+           actor=st.sampled_from([pair[0], pair[0], pair[0], pair[1]]))
+    def run(args: dict[str, Any], actor: McpActor) -> None:
         dep.count(f"MCP {label}")
         kind, value = actor.call(name, args)
         check_reply(kind, value, label)
@@ -109,12 +118,12 @@ def fuzz_tool(dep: Deployment, actor: McpActor, label: str, name: str, schema: d
     run()
 
 
-def test_every_tool_argument(deployment: Deployment, actors: dict[str, McpActor]) -> None:
+def test_every_tool_argument(deployment: Deployment, actors: dict[str, tuple[McpActor, McpActor]]) -> None:
     n_tools = 0
-    for provider, actor in sorted(actors.items()):
-        for tool in actor.tools:
+    for provider, pair in sorted(actors.items()):
+        for tool in pair[0].tools:
             n_tools += 1
             schema = tool.input_schema if isinstance(tool.input_schema, dict) else {}
-            fuzz_tool(deployment, actor, f"{provider}/{tool.name}", tool.name, schema)
+            fuzz_tool(deployment, pair, f"{provider}/{tool.name}", tool.name, schema)
             deployment.assert_alive()
     assert n_tools >= 20
