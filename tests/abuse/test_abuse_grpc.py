@@ -118,9 +118,3 @@ def test_every_atlas_rpc_field(deployment: Deployment) -> None:
             fuzz(deployment, requests(req_cls).filter(harmless), fn, f"atlas {method.name}")
             deployment.assert_alive()
     assert set(deployment.states()) == live
-
-
-@settings(max_examples=1, deadline=None)
-@given(st.just(None))
-def test_hypothesis_is_wired(_: None) -> None:
-    """Guards against a settings change that silently turns the suite off."""
