@@ -18,15 +18,13 @@ import os
 import re
 from pathlib import Path
 
+from robonix_api.validation import ID_MAX, NOTE_MAX, clip
+
 #: A map id: a letter or digit, then letters, digits, ``.``, ``_``, ``-``; 64 characters at most.
-MAP_ID_MAX = 64
+MAP_ID_MAX = ID_MAX
 _ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 #: Written into every folder the map store saves; ``delete_map`` deletes only folders holding it.
 MARKER = ".robonix-map"
-#: Longest ``note`` a map may carry (bytes, UTF-8).
-NOTE_MAX = 4096
-#: Echoed user input in an error message is cut to this many characters.
-ECHO_MAX = 80
 _STAGE = re.compile(r"\.(?P<id>[A-Za-z0-9][A-Za-z0-9._-]{0,63})\.(?P<kind>saving|old)-(?P<pid>\d+)-.*")
 _LEGACY_STAGE = re.compile(r"\.(?P<id>[A-Za-z0-9][A-Za-z0-9._-]{0,63})\.(?P<kind>saving|old)-.*")
 
@@ -35,14 +33,12 @@ class MapIdError(ValueError):
     """The map id is not a plain name (path separators, '..', empty, too long, control characters)."""
 
 
+__all__ = ["MAP_ID_MAX", "MARKER", "NOTE_MAX", "MapDirError", "MapIdError", "check_id", "check_note", "clip",
+           "default_maps_root", "is_map_folder", "resolve_map_dir", "stale_staging"]
+
+
 class MapDirError(ValueError):
     """``map_dir`` lies outside the maps root (or cannot be resolved)."""
-
-
-def clip(value: object, limit: int = ECHO_MAX) -> str:
-    """``repr(value)`` cut to ``limit`` characters, so an error never echoes unbounded input."""
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit] + f"... ({len(str(value))} chars)"
 
 
 def check_id(map_id: str) -> str:
@@ -54,7 +50,7 @@ def check_id(map_id: str) -> str:
 
 
 def check_note(note: str) -> str:
-    """``note`` itself, or ValueError naming the field when longer than :data:`NOTE_MAX` bytes."""
+    """``note`` itself, or ValueError naming the field when longer than ``NOTE_MAX`` (4096) bytes."""
     size = len(note.encode("utf-8", "surrogatepass"))
     if size > NOTE_MAX:
         raise ValueError(f"note: at most {NOTE_MAX} bytes, got {size}")
