@@ -92,6 +92,7 @@ class ProcGroup:
     log_path: Path | None
     start_ticks: int | None
     extra_pids: set[int]
+    log_offset: int = 0  # size of the log before this run (appended logs of restarted processes)
 
     @property
     def pid(self) -> int:
