@@ -1,0 +1,40 @@
+"""Helpers of the fault tests: a navigate call that rides out a busy provider's slow status replies."""
+
+from __future__ import annotations
+
+import grpc
+from e2e.conftest import _grpc_endpoint
+from support.procs import wait_until
+
+from robonix_api.atlas_client import AtlasClient
+from robonix_api.proto_gen import navigation_pb2
+from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
+
+
+def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str]:
+    """Send a goal over gRPC and wait for its end; a status call that times out (a just-restarted process
+    still warming up on a loaded machine) is asked again, not taken as the answer."""
+    with AtlasClient(atlas) as client:
+        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
+        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
+    req = navigation_pb2.Navigate_Request()
+    req.goal.header.frame_id = "map"
+    req.goal.pose.position.x, req.goal.pose.position.y = x, y
+    req.goal.pose.orientation.w = 1.0
+    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch:
+        resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=30)
+        assert resp.accepted, resp.detail
+        status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)
+
+        def terminal() -> navigation_pb2.GetNavigationStatus_Response | None:
+            try:
+                st = status.GetNavigationStatus(navigation_pb2.GetNavigationStatus_Request(run_id=resp.run_id),
+                                                timeout=10)
+            except grpc.RpcError as exc:
+                if exc.code() == grpc.StatusCode.DEADLINE_EXCEEDED:
+                    return None
+                raise
+            return st if st.state in ("SUCCEEDED", "FAILED", "CANCELED") else None
+
+        st = wait_until(terminal, timeout_s, f"goal {resp.run_id} to finish", 0.5)
+    return st.state, st.detail
