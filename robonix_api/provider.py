@@ -332,9 +332,9 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         found = self.atlas.query(id=self.id)
         return bool(found) and found[0].state == LifecycleState.TERMINATED
 
-    def _watch_atlas(self) -> Any:
-        """A channel to the atlas that only watches its connection: when the atlas comes back after it
-        was lost (a restart), wake the heartbeat at once, so this provider re-registers within about a
+    def _watch_atlas(self) -> None:
+        """Watch the connection to the atlas on a channel of its own: when it comes back after it was lost
+        (an atlas restart), wake the heartbeat at once, so this provider re-registers within about a
         second instead of at its next heartbeat (seconds to tens of seconds later)."""
         try:
             addr = self._atlas_address().removeprefix("grpc://")
@@ -344,26 +344,33 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                                                       ("grpc.max_reconnect_backoff_ms", 1000)])
         except Exception as exc:  # noqa: BLE001 (best effort: heartbeats still find a restart)
             log.debug("no atlas watch: %s", exc)
-            return None
-        seen = {"lost": False}
+            return
+        lost = threading.Event()
 
         def on_change(state: grpc.ChannelConnectivity) -> None:
-            if state in (grpc.ChannelConnectivity.TRANSIENT_FAILURE, grpc.ChannelConnectivity.IDLE):
-                seen["lost"] = True
-            elif state == grpc.ChannelConnectivity.READY and seen["lost"]:
-                seen["lost"] = False
-                self._hb_wake.set()
+            if state != grpc.ChannelConnectivity.READY:
+                lost.set()
 
-        ch.subscribe(on_change, try_to_connect=True)
-        return ch
+        ch.subscribe(on_change)
+        try:
+            while not self._stop.is_set():
+                if not lost.wait(1.0):
+                    continue
+                lost.clear()
+                while not self._stop.is_set():  # (re)connect; a gone atlas is retried every second
+                    try:
+                        grpc.channel_ready_future(ch).result(timeout=1.0)
+                        break
+                    except grpc.FutureTimeoutError:
+                        continue
+                self._hb_wake.set()
+        finally:
+            ch.unsubscribe(on_change)
+            ch.close()
 
     def _heartbeat_loop(self, period_s: float) -> None:
-        watch = self._watch_atlas()
-        try:
-            self._heartbeat_until_stopped(period_s)
-        finally:
-            if watch is not None:
-                watch.close()
+        threading.Thread(target=self._watch_atlas, name=f"atlas-watch-{self.id}", daemon=True).start()
+        self._heartbeat_until_stopped(period_s)
 
     def _heartbeat_until_stopped(self, period_s: float) -> None:
         failing = False
