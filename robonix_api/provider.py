@@ -336,8 +336,12 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         """Watch the connection to the atlas on a channel of its own: when it comes back after it was lost
         (an atlas restart), wake the heartbeat at once, so this provider re-registers within about a
         second instead of at its next heartbeat (seconds to tens of seconds later)."""
+        addr = next((v for v in (getattr(self._atlas, a, None) for a in ("address", "_address", "target"))
+                     if isinstance(v, str) and v), "")
+        if not addr:
+            return  # not a client of a real atlas (a test double): nothing to watch
         try:
-            addr = self._atlas_address().removeprefix("grpc://")
+            addr = addr.removeprefix("grpc://")
             ch = grpc.insecure_channel(addr, options=[("grpc.enable_http_proxy", 0),
                                                       ("grpc.initial_reconnect_backoff_ms", 200),
                                                       ("grpc.min_reconnect_backoff_ms", 200),
@@ -364,6 +368,8 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                     except grpc.FutureTimeoutError:
                         continue
                 self._hb_wake.set()
+        except Exception as exc:  # noqa: BLE001 (e.g. interpreter shutdown; heartbeats still work)
+            log.debug("atlas watch ended: %s", exc)
         finally:
             ch.unsubscribe(on_change)
             ch.close()
