@@ -11,9 +11,11 @@ from robonix_api.proto_gen import navigation_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 
 
-def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str]:
+def navigate(atlas: str, x: float, y: float, timeout_s: float, accept_within_s: float = 10.0) -> tuple[str, str]:
     """Send a goal over gRPC and wait for its end; a status call that times out (a just-restarted process
-    still warming up on a loaded machine) is asked again, not taken as the answer."""
+    still warming up on a loaded machine) is asked again, not taken as the answer. A goal rejected because
+    an upstream "left the atlas" is sent again for ``accept_within_s``: navigation re-checks its
+    upstreams every 2 s, so right after a restart it may not have seen the new provider yet."""
     with AtlasClient(atlas) as client:
         nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
         status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
@@ -22,8 +24,14 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str
     req.goal.pose.position.x, req.goal.pose.position.y = x, y
     req.goal.pose.orientation.w = 1.0
     with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch:
-        resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=30)
-        assert resp.accepted, resp.detail
+        nav = stubs.RobonixServiceNavigationNavigateStub(nav_ch)
+
+        def accepted() -> navigation_pb2.Navigate_Response | None:
+            r = nav.Navigate(req, timeout=30)
+            assert r.accepted or "left the atlas" in r.detail, r.detail
+            return r if r.accepted else None
+
+        resp = wait_until(accepted, accept_within_s, "navigation to accept the goal", 0.25)
         status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)
 
         def terminal() -> navigation_pb2.GetNavigationStatus_Response | None:
