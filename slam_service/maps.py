@@ -174,8 +174,12 @@ class Autosave:
         return load_session(self.path)
 
     def discard(self) -> None:
-        """A fresh start: an autosave of an earlier run must never be resumed by a later crash."""
-        self.path.unlink(missing_ok=True)
+        """A fresh start: an autosave of an earlier run must never be resumed by a later crash. An
+        unusable map_dir is not an error here (saving reports it; the autosave thread warns)."""
+        try:
+            self.path.unlink(missing_ok=True)
+        except OSError:
+            pass
 
 
 def resume_engine(session: SessionData, slam_cfg: SlamConfig) -> tuple[SlamEngine, tuple[float, float, float]]:
