@@ -149,12 +149,15 @@ class Supervisor:
 
     def _on_death(self, r: EntryRunner, w: _Watch, now: float) -> None:
         assert r.proc is not None
-        rc = r.proc.popen.returncode
-        how = exit_text(rc)
+        failed_start = w.restarting  # the restarted process failed to come up (stopped by its runner)
+        rc = r.proc.popen.poll()
+        how = f"failed to start again ({r.failure})" if failed_start else exit_text(rc)
+        if failed_start and not rc:
+            rc = 1  # a start that failed is a failure, however the stopped process exited
         prev = mark_terminated(self.atlas, r.name, f"process {how} (seen by rbnx boot)")
         if prev in (ACTIVE, INACTIVE) and not w.restarting:
             r.restart_target = "active" if prev == ACTIVE else "inactive"
-        r.proc.stop(2.0)  # anything the dead leader left in its group goes too
+        r.proc.stop(2.0)  # after telling the atlas: anything the dead leader left in its group goes too
         w.down, w.restarting = True, False
         decision = w.tracker.on_exit(rc, now, w.up_since)
         if decision == "restart":
@@ -188,7 +191,7 @@ class Supervisor:
             if w.tracker.due(now):
                 w.tracker.started()
                 r.respawn(self.atlas)
-                w.restarting = True
+                w.down, w.restarting, w.up_since = False, True, now
                 self._show(r, r.state, f"restart {w.tracker.restarts}")
             return
         if r.ok and not r.proc.running():
