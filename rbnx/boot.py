@@ -320,7 +320,7 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
 
             def respawn_atlas() -> ProcGroup:
                 nonlocal atlas_group
-                group = spawn_atlas(atlas_addr, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log,
+                group = spawn_atlas(atlas_addr, base_env, opts.log_dir / "atlas.log", deploy.atlas_log,
                                     append=True)
                 atlas_group = group
                 wait_atlas(group, opts.log_dir / "atlas.log", after=group.log_offset)

@@ -1,11 +1,17 @@
-"""Helpers of the fault tests: a navigate call that rides out a busy provider's slow status replies."""
+"""Helpers of the fault tests: a navigate call that rides out a busy provider's slow status replies, and
+adopting a boot's deployment token (the SDK's and rbnx's clients send ``$ROBONIX_DEPLOY_TOKEN``)."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import grpc
+import pytest
 from e2e.conftest import _grpc_endpoint
 from support.procs import wait_until
 
+from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import navigation_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
@@ -23,7 +29,7 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float, accept_within_s: 
     req.goal.header.frame_id = "map"
     req.goal.pose.position.x, req.goal.pose.position.y = x, y
     req.goal.pose.orientation.w = 1.0
-    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch:
+    with auth.channel(nav_ep) as nav_ch, auth.channel(status_ep) as st_ch:
         nav = stubs.RobonixServiceNavigationNavigateStub(nav_ch)
 
         def accepted() -> navigation_pb2.Navigate_Response | None:
@@ -46,3 +52,11 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float, accept_within_s: 
 
         st = wait_until(terminal, timeout_s, f"goal {resp.run_id} to finish", 0.5)
     return st.state, st.detail
+
+
+def adopt_token(state_file: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+    """This test acts as a client of the deployment: its token for the test's duration."""
+    token = str(json.loads(state_file.read_text()).get("token") or "")
+    if token:
+        monkeypatch.setenv("ROBONIX_DEPLOY_TOKEN", token)
+    return token

@@ -17,6 +17,8 @@ from e2e.conftest import SIM_DEPLOY, alive, e2e_env, rbnx_cmd, recorded_pids, wa
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState
 
+from .faultutil import adopt_token
+
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 
 ENTRIES = ("panda_mobile", "mapping", "nav2")
@@ -31,7 +33,7 @@ def _active(atlas: str) -> set[str]:
         return set()
 
 
-def test_atlas_sigkill_is_restarted_and_every_provider_re_registers_active(tmp_path: Path) -> None:
+def test_atlas_sigkill_is_restarted_and_every_provider_re_registers_active(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2")
     out = tmp_path / "boot.out"
     with open(out, "w") as fh:
@@ -43,6 +45,7 @@ def test_atlas_sigkill_is_restarted_and_every_provider_re_registers_active(tmp_p
     try:
         wait_until(lambda: proc.poll() is None and "3/3 entries ready" in out.read_text(), 150, "boot summary")
         (state_file,) = (tmp_path / "state").glob("boot-*.json")
+        adopt_token(state_file, monkeypatch)
         st = json.loads(state_file.read_text())
         atlas = st["atlas"]
         every_pid.update(recorded_pids(state_file))

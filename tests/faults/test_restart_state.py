@@ -14,6 +14,8 @@ from e2e.conftest import alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
 from rbnx.atlas_rpc import CMD, Atlas, Driver, driver_capability
 from robonix_api.types import LifecycleState
 
+from .faultutil import adopt_token
+
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(240)]
 
 MINIMAL = Path(__file__).resolve().parents[2] / "examples" / "minimal"
@@ -53,7 +55,7 @@ def _pid(state_file: Path, name: str) -> int:
     return next(c["pid"] for c in json.loads(state_file.read_text())["children"] if c["name"] == name)
 
 
-def test_inactive_comes_back_inactive_and_restart_max_gives_up(tmp_path: Path) -> None:
+def test_inactive_comes_back_inactive_and_restart_max_gives_up(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     env = e2e_env(tmp_path)
     out = tmp_path / "boot.out"
     with open(out, "w") as fh:
@@ -65,6 +67,7 @@ def test_inactive_comes_back_inactive_and_restart_max_gives_up(tmp_path: Path) -
     try:
         wait_until(lambda: proc.poll() is None and "2/2 entries ready" in out.read_text(), 90, "boot summary")
         (state_file,) = (tmp_path / "state").glob("boot-*.json")
+        adopt_token(state_file, monkeypatch)
         atlas = json.loads(state_file.read_text())["atlas"]
         every_pid.update(recorded_pids(state_file))
 

@@ -12,18 +12,18 @@ import subprocess
 import time
 from pathlib import Path
 
-import grpc
 import numpy as np
 import pytest
 from e2e.conftest import SIM_DEPLOY, _grpc_endpoint, alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
 
+from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.grid import GridMap, load_map_yaml
 from robonix_api.proto_gen import map_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
 
-from .faultutil import navigate
+from .faultutil import adopt_token, navigate
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
@@ -53,13 +53,13 @@ def nodes_in(session_file: Path) -> int:
 def save_map(atlas: str, map_id: str, map_dir: Path) -> GridMap:
     with AtlasClient(atlas) as client:
         ep = _grpc_endpoint(client, "robonix/service/map/save_map")
-    with grpc.insecure_channel(ep) as ch:
+    with auth.channel(ep) as ch:
         r = stubs.RobonixServiceMapSaveMapStub(ch).SaveMap(map_pb2.SaveMap_Request(map_id=map_id), timeout=60)
     assert r.ok, r.detail
     return load_map_yaml(map_dir / map_id / "map.yaml")
 
 
-def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path) -> None:
+def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     map_dir = tmp_path / "maps"
     env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", ROBONIX_MAP_DIR=str(map_dir))
     out = tmp_path / "boot.out"
@@ -73,6 +73,7 @@ def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: P
     try:
         wait_until(lambda: proc.poll() is None and "3/3 entries ready" in out.read_text(), 150, "boot summary")
         (state_file,) = (tmp_path / "state").glob("boot-*.json")
+        adopt_token(state_file, monkeypatch)
         atlas = json.loads(state_file.read_text())["atlas"]
         every_pid.update(recorded_pids(state_file))
 

@@ -22,7 +22,7 @@ from e2e.conftest import SIM_DEPLOY, alive, e2e_env, rbnx_cmd, recorded_pids, wa
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState
 
-from .faultutil import navigate
+from .faultutil import adopt_token, navigate
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
@@ -41,7 +41,7 @@ def _children(state_file: Path) -> dict[str, dict]:
     return {c["name"]: c for c in json.loads(state_file.read_text())["children"]}
 
 
-def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_succeeds(tmp_path: Path) -> None:
+def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_succeeds(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2")
     out = tmp_path / "boot.out"
     with open(out, "w") as fh:
@@ -58,6 +58,7 @@ def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_su
 
         wait_until(booted, 150, "the boot summary (3/3 entries ready)")
         (state_file,) = (tmp_path / "state").glob("boot-*.json")
+        adopt_token(state_file, monkeypatch)
         atlas = json.loads(state_file.read_text())["atlas"]
         every_pid.update(recorded_pids(state_file))
 
