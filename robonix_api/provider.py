@@ -362,16 +362,20 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                     continue
                 lost.clear()
                 while not self._stop.is_set():  # (re)connect; a gone atlas is retried every second
+                    ready = grpc.channel_ready_future(ch)
                     try:
-                        grpc.channel_ready_future(ch).result(timeout=1.0)
+                        ready.result(timeout=1.0)
                         break
                     except grpc.FutureTimeoutError:
-                        continue
+                        ready.cancel()  # unsubscribes it; a new one asks to connect again
                 self._hb_wake.set()
         except Exception as exc:  # noqa: BLE001 (e.g. interpreter shutdown; heartbeats still work)
             log.debug("atlas watch ended: %s", exc)
         finally:
             ch.unsubscribe(on_change)
+            # gRPC's connectivity poller thread ends on its next tick (0.2 s) once nothing is subscribed;
+            # closing the channel under it makes that thread die with "Channel closed!" on stderr.
+            threading.Event().wait(0.5)
             ch.close()
 
     def _heartbeat_loop(self, period_s: float) -> None:
