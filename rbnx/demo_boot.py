@@ -7,7 +7,6 @@ fall back to stopping the processes the boot recorded in its state file (by PID 
 
 from __future__ import annotations
 
-import ctypes
 import os
 import signal
 import socket
@@ -19,11 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from rbnx.atlas_rpc import STATE_NAMES, Atlas, AtlasError
-from rbnx.procs import pid_alive, stop_recorded, tail
+from rbnx.procs import pid_alive, stop_recorded, tail, with_parent_death_signal
 from rbnx.statefile import read_state
 from robonix_api.auth import TOKEN_ENV
-
-PR_SET_PDEATHSIG = 1
 
 
 class DemoError(RuntimeError):
@@ -32,14 +29,6 @@ class DemoError(RuntimeError):
     def __init__(self, message: str, lines: list[str] | None = None) -> None:
         super().__init__(message)
         self.lines = lines or []
-
-
-def _die_with_parent() -> None:
-    """In the child before exec: get SIGINT if the demo dies (even by SIGKILL), so boot still cleans up."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGINT)
-    except (OSError, AttributeError):
-        pass
 
 
 def domain_free(domain: int) -> bool:
@@ -85,11 +74,13 @@ class BootChild:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         cmd = [sys.executable, "-m", "rbnx.cli", "boot", "-f", str(self.deploy), "--no-progress",
                "--log-dir", str(self.log_dir), "--boot-timeout", f"{self.boot_timeout:g}", "--term-timeout", "20"]
+        # SIGINT to the boot if the demo dies (even by SIGKILL), so the boot still cleans up; set after a
+        # vfork-exec (no preexec_fn: that would fork() a process holding gRPC channels).
+        cmd = with_parent_death_signal(cmd, signal.SIGINT)
         with open(self.boot_log, "wb") as fh:
             # Own session: a terminal's Ctrl-C reaches only the demo, which forwards exactly one SIGINT.
             self.proc = subprocess.Popen(cmd, env=self.env, stdout=fh, stderr=subprocess.STDOUT,
-                                         stdin=subprocess.DEVNULL, start_new_session=True,
-                                         preexec_fn=_die_with_parent)
+                                         stdin=subprocess.DEVNULL, start_new_session=True)
 
     def running(self) -> bool:
         return self.proc is not None and self.proc.poll() is None

@@ -164,12 +164,12 @@ def set_supervised(on: bool) -> None:
 _SETPRIV = shutil.which("setpriv")
 # Where setpriv is missing: a tiny interpreter (no site import) sets the parent-death signal on itself and
 # execs the command; it is started by vfork+exec like any other child, so no fork() happens either.
-_PDEATHSIG_SHIM = ("import ctypes, os, sys; ctypes.CDLL(None).prctl(1, 15); "
-                   "os.execvp(sys.argv[1], sys.argv[1:])")
+_PDEATHSIG_SHIM = ("import ctypes, os, sys; ctypes.CDLL(None).prctl(1, int(sys.argv[1])); "
+                   "os.execvp(sys.argv[2], sys.argv[2:])")
 
 
-def _supervised_command(command: list[str]) -> list[str]:
-    """The command wrapped so that the child gets SIGTERM when rbnx dies.
+def with_parent_death_signal(command: list[str], sig: signal.Signals = signal.SIGTERM) -> list[str]:
+    """The command wrapped so that the child gets ``sig`` when its parent (rbnx) dies.
 
     Why not ``preexec_fn``: any preexec_fn makes Python use fork() instead of vfork(), and fork() runs
     gRPC's atfork handlers in the child (unless fork support is off), whose pollers then trip over the
@@ -179,15 +179,15 @@ def _supervised_command(command: list[str]) -> list[str]:
     ``setpriv``, else by a one-line Python shim that execs the command.
     """
     if _SETPRIV:
-        return [_SETPRIV, "--pdeathsig", "TERM", "--", *command]
-    return [sys.executable, "-S", "-c", _PDEATHSIG_SHIM, *command]
+        return [_SETPRIV, "--pdeathsig", sig.name.removeprefix("SIG"), "--", *command]
+    return [sys.executable, "-S", "-c", _PDEATHSIG_SHIM, str(int(sig)), *command]
 
 
 def spawn(name: str, command: list[str], cwd: Path, env: Mapping[str, str], log_path: Path | None,
           append: bool = False) -> ProcGroup:
     """Start `command` in a new session with stdout+stderr to `log_path` (or inherited when None)."""
     if _supervised:
-        command = _supervised_command(command)
+        command = with_parent_death_signal(command)
     out = open(log_path, "ab" if append else "wb") if log_path else None  # noqa: SIM115
     try:
         popen = subprocess.Popen(
