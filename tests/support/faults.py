@@ -56,6 +56,22 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def deploy_copy(tmp: Path, **entries: dict[str, Any]) -> Path:
+    """The sim deploy written to ``tmp/deploy.yaml`` with absolute package paths and per-entry keys
+    merged in (e.g. ``mapping={"restart": "never"}``: a killed provider then stays dead)."""
+    import yaml
+
+    doc = yaml.safe_load(SIM_DEPLOY.read_text())
+    for section in ("primitive", "service", "skill"):
+        for e in doc.get(section) or []:
+            if e.get("path"):
+                e["path"] = str((SIM_DEPLOY.parent / e["path"]).resolve())
+            e.update(entries.get(e["name"], {}))
+    out = tmp / "deploy.yaml"
+    out.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return out
+
+
 def atlas_cmd(listen: str) -> list[str]:
     exe = Path(sys.executable).parent / "robonix-atlas"
     return [str(exe), "--listen", listen] if exe.exists() else [sys.executable, "-m", "atlas.server",
@@ -66,10 +82,10 @@ class SimBoot:
     """``rbnx boot`` of the sim deploy in ``tmp``; a context manager that never leaves a process behind."""
 
     def __init__(self, tmp: Path, scene: str = "kitchen", rtf: str = "1", env: dict[str, str] | None = None,
-                 boot_timeout_s: float = 180.0) -> None:
+                 boot_timeout_s: float = 180.0, deploy: Path = SIM_DEPLOY) -> None:
         from rbnx.demo_boot import pick_domain_id
 
-        self.tmp = tmp
+        self.tmp, self.deploy = tmp, deploy
         self.listen = f"127.0.0.1:{free_port()}"
         self.env = dict(os.environ, RBNX_STATE_DIR=str(tmp / "state"), RBNX_ATLAS_LISTEN=self.listen,
                         RBNX_SIM_SCENE=scene, RBNX_SIM_RTF=rtf, PYTHONUNBUFFERED="1",
@@ -81,7 +97,7 @@ class SimBoot:
         self.own_atlas: subprocess.Popen | None = None
         self._channels: dict[str, grpc.Channel] = {}
         with open(self.out, "w") as fh:
-            self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(SIM_DEPLOY), "--no-progress",
+            self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--no-progress",
                                                        "--log-dir", str(tmp / "logs")],
                                          env=self.env, cwd=tmp, stdout=fh, stderr=subprocess.STDOUT,
                                          stdin=subprocess.DEVNULL)
@@ -206,7 +222,7 @@ class SimBoot:
         An atlas this helper restarted is not rbnx's to stop: it is stopped here and not counted.
         """
         self.pids()
-        subprocess.run(rbnx_cmd() + ["shutdown", "-f", str(SIM_DEPLOY)], env=self.env, cwd=self.tmp,
+        subprocess.run(rbnx_cmd() + ["shutdown", "-f", str(self.deploy)], env=self.env, cwd=self.tmp,
                        capture_output=True, text=True, timeout=timeout_s, stdin=subprocess.DEVNULL)
         try:
             self.proc.wait(timeout_s)
