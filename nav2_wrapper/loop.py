@@ -265,7 +265,8 @@ class NavLoop:
 
     def _watch_clock(self, now: float) -> None:
         """Checks that must run even when sim time stands still: a /clock not advancing stops the robot at
-        once and fails the run after clock_timeout_s (wall)."""
+        once and fails the run after clock_timeout_s (wall), or after input_grace_s (wall) when a required
+        input is lost with it (the simulator itself died or stalled: the run waits for it by name)."""
         if not self.inputs.clock.use_sim_time:
             return
         wall = time.monotonic()
@@ -278,13 +279,21 @@ class NavLoop:
             rec = self.nav.active
             if rec is None or rec.state in TERMINAL:
                 return
-            if stalled > self.cfg.clock_timeout_s:
-                lost, _ = self.inputs.lost(now, self._state, self.cfg.data_timeout_s, self.cfg.map_tf_timeout_s)
-                extra = f"; lost: {'; '.join(f'{k}: {v}' for k, v in sorted(lost.items()))}" if lost else ""
-                self._end_active(f"/clock stalled for {stalled:.0f} s (simulator stopped?){extra}", canceled=False)
-            elif stalled > self.cfg.clock_stall_s and not self._paused:
+            if stalled <= self.cfg.clock_stall_s:
+                return
+            if not self._paused:
                 self._paused = True
                 self.publish_zero()
+            lost, _ = self._inputs_lost(now, self._state)
+            if lost:
+                verdict = self.grace.update(now, wall, lost, clock_stalled=True)
+                if verdict.state == GRACE_FAILED:
+                    self._end_active(f"{verdict.detail}; /clock stalled for {stalled:.0f} s", canceled=False)
+                else:
+                    rec.detail = f"{verdict.detail}; /clock stalled for {stalled:.1f} s"
+            elif stalled > self.cfg.clock_timeout_s:
+                self._end_active(f"/clock stalled for {stalled:.0f} s (simulator stopped?)", canceled=False)
+            else:
                 rec.detail = f"paused: /clock stalled for {stalled:.1f} s; robot stopped"
 
     def _watch_upstream(self) -> None:

@@ -46,7 +46,7 @@ class InputGrace:
     def paused(self) -> bool:
         return self._paused
 
-    def update(self, now: float, wall: float, lost: Mapping[str, str]) -> Verdict:
+    def update(self, now: float, wall: float, lost: Mapping[str, str], clock_stalled: bool = False) -> Verdict:
         for name in list(self._since):
             if name not in lost:
                 del self._since[name]
@@ -55,7 +55,8 @@ class InputGrace:
         if not lost:
             was, self._paused = self._paused, False
             return Verdict(OK, resumed=was)
-        waited = {n: min(now - t0, wall - w0) for n, (t0, w0) in self._since.items()}
+        waited = {n: (wall - w0) if clock_stalled else min(now - t0, wall - w0)
+                  for n, (t0, w0) in self._since.items()}
         worst = max(waited, key=lambda n: waited[n])
         if waited[worst] > self.grace_s:
             self._paused = False

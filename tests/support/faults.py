@@ -278,11 +278,12 @@ class SimBoot:
 
 @dataclass
 class Sample:
-    wall: float
+    wall: float                      # when the ground truth was asked for
     sim: float | None = None         # ground truth's sim time (None: the HAL did not answer)
     speed: float | None = None
     state: str = ""
     detail: str = ""
+    status_wall: float = 0.0         # when the status answered (the HAL may have kept us waiting)
 
 
 @dataclass
@@ -316,6 +317,7 @@ class Recorder:
                 pass
             try:
                 s.state, s.detail = self.boot.status(self.run_id)
+                s.status_wall = time.monotonic()
             except Exception:
                 pass
             self.samples.append(s)
@@ -333,10 +335,13 @@ class Recorder:
         sims = [s.sim for s in self.samples if s.wall <= wall and s.sim is not None]
         return sims[-1] if sims else None
 
-    def stopped_after(self, wall: float) -> tuple[float, float] | None:
-        """(sim s, wall s) from ``wall`` to the first ground-truth speed below 0.05 m/s, or None."""
+    def stopped_after(self, wall: float, within_s: float = math.inf) -> tuple[float, float] | None:
+        """(sim s, wall s) from ``wall`` to the first ground-truth speed below 0.05 m/s (looking no further
+        than ``within_s`` wall seconds), or None."""
         t_sim = self.sim_at(wall)
         for s in self.samples:
+            if s.wall > wall + within_s:
+                break
             if s.wall > wall and s.speed is not None and s.speed < STOPPED_MPS:
                 return (s.sim - t_sim if t_sim is not None and s.sim is not None else math.nan), s.wall - wall
         return None
@@ -344,13 +349,13 @@ class Recorder:
     def status_change_after(self, wall: float) -> tuple[float, str, str] | None:
         """(wall s, state, detail) of the first status after ``wall`` that reports the fault: a new state,
         or a RUNNING detail that says it waits / is paused."""
-        before = [s for s in self.samples if s.wall <= wall and s.state]
+        before = [s for s in self.samples if s.status_wall <= wall and s.state]
         prev = before[-1].state if before else "RUNNING"
         for s in self.samples:
-            if s.wall <= wall or not s.state:
+            if s.status_wall <= wall or not s.state:
                 continue
             if s.state != prev or "waiting for" in s.detail or "paused" in s.detail:
-                return s.wall - wall, s.state, s.detail
+                return s.status_wall - wall, s.state, s.detail
         return None
 
 
