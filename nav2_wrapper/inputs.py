@@ -199,11 +199,13 @@ class Inputs:
         return out
 
     def lost(self, now: float, state: RobotState | None, data_timeout_s: float,
-             map_tf_timeout_s: float) -> tuple[dict[str, str], dict[str, str]]:
+             map_tf_timeout_s: float, stale_checks: bool = True) -> tuple[dict[str, str], dict[str, str]]:
         """({source: why} of lost *required* inputs (map→odom, odom), the same for optional ones (scan)).
 
         Lost means: its DDS writer lost liveliness, the atlas reports its provider TERMINATED, or its
-        data is older than the timeout. A source is named by provider id (e.g. ``mapping``).
+        data is older than the timeout (unless ``stale_checks`` is off: right after this process itself
+        was frozen, everything looks old until the queued samples are read). A source is named by
+        provider id (e.g. ``mapping``).
         """
         f = self.frames
         req: dict[str, list[str]] = {}
@@ -216,7 +218,7 @@ class Inputs:
             why.append(term["map"])
         if self.tf.link_lost(f.odom):
             why.append(f"TF {f.map}→{f.odom} stopped (DDS liveliness lost)")
-        elif state is not None and state.map_tf_age > map_tf_timeout_s:
+        elif stale_checks and state is not None and state.map_tf_age > map_tf_timeout_s:
             why.append(f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old)")
         if why:
             req.setdefault(self.source_name("map"), []).extend(why)
@@ -227,15 +229,15 @@ class Inputs:
         odom_topic = self.bindings["odom"].topic
         if self.writer_lost("odom"):
             why.append(f"{odom_topic} stopped (DDS liveliness lost)")
-        else:
+        elif self.tf.link_lost(f.base):
+            why.append(f"TF {f.odom}→{f.base} stopped (DDS liveliness lost)")
+        elif stale_checks:
             age = self.odom_age(now)
             if age > data_timeout_s:
                 why.append(f"no odometry on {odom_topic} for {age:.1f} s" if math.isfinite(age)
                            else f"no odometry on {odom_topic}")
             elif state is not None and state.tf_age > data_timeout_s:
                 why.append(f"TF {f.odom}→{f.base} is stale ({state.tf_age:.1f} s old)")
-            elif self.tf.link_lost(f.base):
-                why.append(f"TF {f.odom}→{f.base} stopped (DDS liveliness lost)")
         if why:
             req.setdefault(self.source_name("odom"), []).extend(why)
         # scan (optional: the obstacle layer) --------------------------------------------------------

@@ -72,6 +72,7 @@ class NavLoop:
         self._clock_wall = time.monotonic()
         self._paused = False
         self._paused_zero_sent = False
+        self._last_step_wall = time.monotonic()
         self._spans = GoalSpans.maybe(cfg.frames.map)  # None unless tracing is on
         self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
         self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
@@ -315,7 +316,12 @@ class NavLoop:
     def _inputs_lost(self, now: float, state: RobotState | None) -> tuple[dict[str, str], dict[str, str]]:
         """{source: why} of lost required inputs and of lost optional ones (see ``Inputs.lost``)."""
         to = self.cfg.data_timeout_s
-        req, opt = self.inputs.lost(now, state, to, self.cfg.map_tf_timeout_s)
+        wall = time.monotonic()
+        # This process was frozen or starved (SIGSTOP, a swapped-out machine): every input looks old until
+        # the samples queued meanwhile are read, so staleness waits one tick; liveliness still counts.
+        fresh = wall - self._last_step_wall < max(to, 0.5)
+        self._last_step_wall = wall
+        req, opt = self.inputs.lost(now, state, to, self.cfg.map_tf_timeout_s, stale_checks=fresh)
         if state is None and self._tf_bad_since is not None and now - self._tf_bad_since > to:
             f = self.cfg.frames
             req.setdefault("TF", f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s")
