@@ -53,7 +53,7 @@ class Inputs:
         self.scan: LaserScan | None = None
         self.scan_seq = 0
         self._warned_frame = False
-        self._node = node
+        self.node = node
         self._had_writer: dict[str, bool] = {}
         self._terminated: dict[str, str] = {}   # role -> why (the atlas' TERMINATED notice)
         self._subs: dict[str, Any] = {}
@@ -66,7 +66,7 @@ class Inputs:
     def _subscribe(self, role: str, b: Binding) -> None:
         cb = {"map": self._on_map, "odom": self._on_odom, "scan": self._on_scan}[role]
         self._had_writer[role] = False
-        self._subs[role] = self._node.create_subscription(
+        self._subs[role] = self.node.create_subscription(
             b.topic, self._TYPES[role], cb, b.qos, on_liveliness=lambda h, alive: self._on_live(role, alive))
 
     def rebind(self, role: str, b: Binding) -> None:

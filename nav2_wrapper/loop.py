@@ -30,7 +30,7 @@ from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
 from nav2_wrapper.core.grace import InputGrace
 from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
 from nav2_wrapper.core.warmup import ready as kernels_ready
-from robonix_api.dds import FrameNotFoundError, Path, TfError
+from robonix_api.dds import FrameNotFoundError, Path, TfError, Twist
 from robonix_api.dds.convert import header, pose_stamped, twist
 from robonix_api.geometry import compose
 
@@ -39,7 +39,7 @@ from .goals import PlanarGoal
 from .inputs import Inputs, RobotState
 from .speed import SpeedLimits
 from .tracing import GoalSpans
-from .upstream import UpstreamWatch
+from .upstream import Binding, UpstreamWatch
 
 log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
@@ -312,6 +312,17 @@ class NavLoop:
             for role, b in rebinds.items():
                 if role in ("map", "odom", "scan"):
                     self.inputs.rebind(role, b)
+                elif role == "cmd_vel":
+                    self._rebind_cmd_vel(b)
+
+    def _rebind_cmd_vel(self, b: Binding) -> None:
+        """Command the chassis on its new topic (it registered anew, e.g. restarted, elsewhere)."""
+        new = self.inputs.node.create_publisher(b.topic, Twist, b.qos)
+        with self.lock:
+            old, self.pubs.cmd_vel = self.pubs.cmd_vel, new
+            self.inputs.bindings["cmd_vel"] = b
+        old.close()
+        log.info("cmd_vel rebound to %s (provider %s)", b.topic, b.provider_id or "-")
 
     def _inputs_lost(self, now: float, state: RobotState | None) -> tuple[dict[str, str], dict[str, str]]:
         """{source: why} of lost required inputs and of lost optional ones (see ``Inputs.lost``)."""

@@ -74,7 +74,8 @@ class UpstreamWatch:
     def poll(self) -> tuple[dict[str, str], dict[str, Binding]]:
         terminated: dict[str, str] = {}
         rebinds: dict[str, Binding] = {}
-        for role, (contract, _required, default_qos) in ROLES.items():
+        watched = {**ROLES, "cmd_vel": (TWIST_IN, False, "reliable")}
+        for role, (contract, _required, default_qos) in watched.items():
             b = self.bindings.get(role)
             if b is None or b.source != "atlas" or not b.provider_id:
                 continue
@@ -91,6 +92,8 @@ class UpstreamWatch:
                 continue
             nb = resolve_topic(self.atlas, self.consumer, role, contract, default_qos=default_qos,
                                pin=b.provider_id, required=False)
+            if nb is not None and role == "cmd_vel":
+                nb = Binding("cmd_vel", nb.topic, "reliable", nb.provider_id, TWIST_IN)
             if nb is not None and (nb.topic, nb.qos) != (b.topic, b.qos):
                 log.info("%s: provider %s registered anew with %s (was %s)", role, b.provider_id, nb.topic,
                          b.topic)

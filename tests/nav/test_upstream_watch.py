@@ -4,7 +4,7 @@ restarted atlas does not, and a provider registered anew with another topic is f
 from __future__ import annotations
 
 from atlas.server import AtlasServer
-from nav2_wrapper.upstream import MAP, ODOM, UpstreamWatch
+from nav2_wrapper.upstream import MAP, ODOM, TWIST_IN, UpstreamWatch
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.upstream import Binding
 
@@ -21,9 +21,10 @@ def test_upstream_watch_terminated_absent_and_reregistered_elsewhere() -> None:
         with AtlasClient(addr) as c:
             _register(c, "mapping", MAP, "/map")
             _register(c, "chassis", ODOM, "/odom")
+            c.declare_capability("chassis", TWIST_IN, "ros2", "/cmd_vel")
             bindings = {"map": Binding("map", "/map", "latched", "mapping", MAP),
                         "odom": Binding("odom", "/odom", "reliable", "chassis", ODOM),
-                        "cmd_vel": Binding("cmd_vel", "/cmd_vel", "reliable", source="default")}
+                        "cmd_vel": Binding("cmd_vel", "/cmd_vel", "reliable", "chassis", TWIST_IN)}
             watch = UpstreamWatch(c, "nav2", bindings)
             assert watch.poll() == ({}, {})
 
@@ -40,5 +41,12 @@ def test_upstream_watch_terminated_absent_and_reregistered_elsewhere() -> None:
             assert rebinds["map"].topic == "/map_restarted" and rebinds["map"].provider_id == "mapping"
             bindings["map"] = rebinds["map"]               # what Inputs.rebind does
             assert watch.poll() == ({}, {})
+
+            c.unregister("chassis")                       # the chassis restarted: commands go to its new topic
+            _register(c, "chassis", ODOM, "/odom")
+            c.declare_capability("chassis", TWIST_IN, "ros2", "/chassis2/cmd_vel")
+            terminated, rebinds = watch.poll()
+            assert set(rebinds) == {"cmd_vel"} and rebinds["cmd_vel"].topic == "/chassis2/cmd_vel"
+            assert rebinds["cmd_vel"].role == "cmd_vel" and rebinds["cmd_vel"].contract_id == TWIST_IN
     finally:
         server.stop()
