@@ -199,13 +199,15 @@ class Inputs:
         return out
 
     def lost(self, now: float, state: RobotState | None, data_timeout_s: float,
-             map_tf_timeout_s: float, stale_checks: bool = True) -> tuple[dict[str, str], dict[str, str]]:
+             map_tf_timeout_s: float, stale_checks: bool = True,
+             liveliness_checks: bool = True) -> tuple[dict[str, str], dict[str, str]]:
         """({source: why} of lost *required* inputs (map→odom, odom), the same for optional ones (scan)).
 
         Lost means: its DDS writer lost liveliness, the atlas reports its provider TERMINATED, or its
         data is older than the timeout (unless ``stale_checks`` is off: right after this process itself
-        was frozen, everything looks old until the queued samples are read). A source is named by
-        provider id (e.g. ``mapping``).
+        was frozen, everything looks old until the queued samples are read; ``liveliness_checks`` the same
+        for writers' leases, which ran out in our frozen process). A source is named by provider id
+        (e.g. ``mapping``).
         """
         f = self.frames
         req: dict[str, list[str]] = {}
@@ -216,7 +218,7 @@ class Inputs:
         why = []
         if "map" in term:
             why.append(term["map"])
-        if self.tf.link_lost(f.odom):
+        if liveliness_checks and self.tf.link_lost(f.odom):
             why.append(f"TF {f.map}→{f.odom} stopped (DDS liveliness lost)")
         elif stale_checks and state is not None and state.map_tf_age > map_tf_timeout_s:
             why.append(f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old)")
@@ -227,9 +229,9 @@ class Inputs:
         if "odom" in term:
             why.append(term["odom"])
         odom_topic = self.bindings["odom"].topic
-        if self.writer_lost("odom"):
+        if liveliness_checks and self.writer_lost("odom"):
             why.append(f"{odom_topic} stopped (DDS liveliness lost)")
-        elif self.tf.link_lost(f.base):
+        elif liveliness_checks and self.tf.link_lost(f.base):
             why.append(f"TF {f.odom}→{f.base} stopped (DDS liveliness lost)")
         elif stale_checks:
             age = self.odom_age(now)
@@ -245,7 +247,7 @@ class Inputs:
             why = []
             if "scan" in term:
                 why.append(term["scan"])
-            if self.writer_lost("scan"):
+            if liveliness_checks and self.writer_lost("scan"):
                 why.append(f"{self.bindings['scan'].topic} stopped (DDS liveliness lost)")
             if why:
                 opt.setdefault(self.source_name("scan"), []).extend(why)

@@ -43,6 +43,7 @@ from .upstream import Binding, UpstreamWatch
 
 log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
+SELF_FREEZE_S = 1.0  # wall s after this process was frozen during which writers' liveliness losses are not trusted
 WATCH_PERIOD_S = 1.0  # wall s between looks at the atlas (TERMINATED notices, re-registrations)
 
 
@@ -73,6 +74,7 @@ class NavLoop:
         self._paused = False
         self._paused_zero_sent = False
         self._last_step_wall = time.monotonic()
+        self._thawed_at = -math.inf
         self._spans = GoalSpans.maybe(cfg.frames.map)  # None unless tracing is on
         self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
         self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
@@ -330,9 +332,15 @@ class NavLoop:
         wall = time.monotonic()
         # This process was frozen or starved (SIGSTOP, a swapped-out machine): every input looks old until
         # the samples queued meanwhile are read, so staleness waits one tick; liveliness still counts.
+        # Likewise, our own DDS stack could not hear the writers' liveliness while frozen: their leases ran
+        # out here, not there, and are renewed within a lease; so liveliness losses wait SELF_FREEZE_S too.
         fresh = wall - self._last_step_wall < max(to, 0.5)
+        if not fresh:
+            self._thawed_at = wall
         self._last_step_wall = wall
-        req, opt = self.inputs.lost(now, state, to, self.cfg.map_tf_timeout_s, stale_checks=fresh)
+        live = wall - self._thawed_at > SELF_FREEZE_S
+        req, opt = self.inputs.lost(now, state, to, self.cfg.map_tf_timeout_s, stale_checks=fresh,
+                                    liveliness_checks=live)
         if state is None and self._tf_bad_since is not None and now - self._tf_bad_since > to:
             f = self.cfg.frames
             req.setdefault("TF", f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s")

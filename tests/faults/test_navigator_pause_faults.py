@@ -61,7 +61,7 @@ def test_navigator_pause_mapping_sigkill_without_restart_fails_naming_it(tmp_pat
             rec.stop()
         assert state == "FAILED", detail
         assert detail.startswith("mapping lost:") and "input_grace_s=5 s" in detail, detail
-        failed_at = next(s.status_wall for s in rec.samples if s.state == "FAILED")
+        failed_at = next(s.wall for s in rec.samples if s.state == "FAILED")
         assert failed_at - t0 >= 5.0                                   # not before the grace
         stopped = rec.stopped_after(t0)
         assert stopped is not None and stopped[0] <= 1.0, stopped

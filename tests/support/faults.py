@@ -278,84 +278,97 @@ class SimBoot:
 
 @dataclass
 class Sample:
-    wall: float                      # when the ground truth was asked for
-    sim: float | None = None         # ground truth's sim time (None: the HAL did not answer)
+    """One observation: ground truth (``sim``/``speed`` set) or the goal's status (``state`` set)."""
+
+    wall: float                      # when it was answered (monotonic)
+    sim: float | None = None         # ground truth's sim time
     speed: float | None = None
     state: str = ""
     detail: str = ""
-    status_wall: float = 0.0         # when the status answered (the HAL may have kept us waiting)
 
 
 @dataclass
 class Recorder:
-    """Samples ground truth and one goal's status every ``period_s`` (wall) in a thread."""
+    """Samples ground truth and one goal's status every ``period_s`` (wall), each in its own thread, so a
+    frozen navigation process (status calls hanging) does not blind the ground truth, nor the reverse."""
 
     boot: SimBoot
     run_id: str
     period_s: float = 0.05
     samples: list[Sample] = field(default_factory=list)
     _stop: threading.Event = field(default_factory=threading.Event)
-    _thread: threading.Thread | None = None
+    _threads: list[threading.Thread] = field(default_factory=list)
 
     def start(self) -> Recorder:
-        self._thread = threading.Thread(target=self._run, name="fault-recorder", daemon=True)
-        self._thread.start()
+        for fn in (self._ground_truth, self._status):
+            t = threading.Thread(target=self._every, args=(fn,), name="fault-recorder", daemon=True)
+            t.start()
+            self._threads.append(t)
         return self
 
     def stop(self) -> None:
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join(10)
+        for t in self._threads:
+            t.join(10)
 
-    def _run(self) -> None:
+    def _every(self, fn: Any) -> None:
         while not self._stop.is_set():
-            s = Sample(time.monotonic())
             try:
-                gt = self.boot.ground_truth()
-                s.sim, s.speed = gt.sim_time, math.hypot(gt.vx, gt.vy)
+                s = fn()
+                s.wall = time.monotonic()
+                self.samples.append(s)
             except Exception:
                 pass
-            try:
-                s.state, s.detail = self.boot.status(self.run_id)
-                s.status_wall = time.monotonic()
-            except Exception:
-                pass
-            self.samples.append(s)
             self._stop.wait(self.period_s)
 
-    def latest(self) -> Sample | None:
-        return self.samples[-1] if self.samples else None
+    def _ground_truth(self) -> Sample:
+        gt = self.boot.ground_truth()
+        return Sample(0.0, sim=gt.sim_time, speed=math.hypot(gt.vx, gt.vy))
+
+    def _status(self) -> Sample:
+        state, detail = self.boot.status(self.run_id)
+        return Sample(0.0, state=state, detail=detail)
+
+    def _gt(self) -> list[Sample]:
+        return [s for s in list(self.samples) if s.speed is not None]
+
+    def _st(self) -> list[Sample]:
+        return [s for s in list(self.samples) if s.state]
+
+    def latest(self) -> tuple[Sample | None, Sample | None]:
+        """(latest ground truth, latest status)."""
+        gt, st = self._gt(), self._st()
+        return (gt[-1] if gt else None), (st[-1] if st else None)
 
     def moving(self, min_speed: float = 0.1) -> bool:
-        s = self.latest()
-        return s is not None and s.speed is not None and s.speed > min_speed and s.state == "RUNNING"
+        gt, st = self.latest()
+        return gt is not None and st is not None and gt.speed > min_speed and st.state == "RUNNING"
 
     def sim_at(self, wall: float) -> float | None:
         """Sim time of the last ground-truth sample at or before ``wall``."""
-        sims = [s.sim for s in self.samples if s.wall <= wall and s.sim is not None]
+        sims = [s.sim for s in self._gt() if s.wall <= wall]
         return sims[-1] if sims else None
 
     def stopped_after(self, wall: float, within_s: float = math.inf) -> tuple[float, float] | None:
         """(sim s, wall s) from ``wall`` to the first ground-truth speed below 0.05 m/s (looking no further
         than ``within_s`` wall seconds), or None."""
         t_sim = self.sim_at(wall)
-        for s in self.samples:
+        for s in self._gt():
             if s.wall > wall + within_s:
                 break
-            if s.wall > wall and s.speed is not None and s.speed < STOPPED_MPS:
-                return (s.sim - t_sim if t_sim is not None and s.sim is not None else math.nan), s.wall - wall
+            if s.wall > wall and s.speed < STOPPED_MPS:
+                return (s.sim - t_sim if t_sim is not None else math.nan), s.wall - wall
         return None
 
     def status_change_after(self, wall: float) -> tuple[float, str, str] | None:
         """(wall s, state, detail) of the first status after ``wall`` that reports the fault: a new state,
         or a RUNNING detail that says it waits / is paused."""
-        before = [s for s in self.samples if s.status_wall <= wall and s.state]
+        st = self._st()
+        before = [s for s in st if s.wall <= wall]
         prev = before[-1].state if before else "RUNNING"
-        for s in self.samples:
-            if s.status_wall <= wall or not s.state:
-                continue
-            if s.state != prev or "waiting for" in s.detail or "paused" in s.detail:
-                return s.status_wall - wall, s.state, s.detail
+        for s in st:
+            if s.wall > wall and (s.state != prev or "waiting for" in s.detail or "paused" in s.detail):
+                return s.wall - wall, s.state, s.detail
         return None
 
 
