@@ -21,6 +21,7 @@ import re
 import threading
 import time
 import uuid
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -44,6 +45,10 @@ from robonix_api.types import (
 log = logging.getLogger(__name__)
 
 MINT_ATTEMPTS = 16
+CHANNEL_LEASE_MS = 300_000  # a channel not renewed (consumer heartbeat, reconnect) for this long expires
+MAX_CHANNELS_PER_CONSUMER = 64
+MAX_CHANNELS = 2048
+MAX_SNAPSHOT_CHANNELS = 500  # InspectAtlas lists the newest ones; the reply stays far below gRPC's 4 MB
 EPHEMERAL_PREFIX = "com.robonix.ephemeral."
 SHARED_DRIVER = "robonix/lifecycle/driver"  # the Driver under its generic name (every provider of ours)
 
@@ -159,6 +164,7 @@ class _Channel:
     endpoint: str
     params: TransportParams
     opened_ms: int
+    renewed_mono: float = 0.0
 
 
 _LEGAL_EDGES = {
@@ -181,15 +187,26 @@ class Registry:
         gc_after_terminated_ms: int = 600000,
         clock: Callable[[], float] = time.monotonic,
         wall_clock: Callable[[], float] = time.time,
+        endpoint_check: Callable[[str], str | None] | None = None,
+        channel_lease_ms: int = CHANNEL_LEASE_MS,
+        max_channels_per_consumer: int = MAX_CHANNELS_PER_CONSUMER,
+        max_channels: int = MAX_CHANNELS,
     ) -> None:
         self.catalogue = catalogue if catalogue is not None else Catalogue()
         self.heartbeat_timeout_ms = int(heartbeat_timeout_ms)
         self.gc_after_terminated_ms = int(gc_after_terminated_ms)
+        self.channel_lease_ms = int(channel_lease_ms)
+        self.max_channels_per_consumer = max(1, int(max_channels_per_consumer))
+        self.max_channels = max(1, int(max_channels))
+        self._endpoint_check = endpoint_check
         self._clock = clock
         self._wall = wall_clock
         self._lock = threading.Lock()
         self._providers: dict[str, _Provider] = {}
-        self._channels: dict[str, _Channel] = {}
+        # Oldest first: renewing a channel moves it to the end, so eviction under the caps takes the stalest.
+        self._channels: OrderedDict[str, _Channel] = OrderedDict()
+        self._by_consumer: dict[str, OrderedDict[str, None]] = {}
+        self.channels_evicted = 0  # dropped by the caps or an expired lease (diagnostics, tests)
         self._by_contract: dict[str, set[str]] = {}
         self._endpoints: dict[tuple[Transport, str], set[str]] = {}
 
@@ -225,8 +242,57 @@ class Registry:
         """Drop channels where pid is the provider or the consumer (both ends are stale then)."""
         dead = [c for c, ch in self._channels.items() if pid in (ch.provider_id, ch.consumer_id)]
         for c in dead:
-            del self._channels[c]
+            self._pop_channel(c)
         return len(dead)
+
+    def _pop_channel(self, channel_id: str) -> _Channel | None:
+        ch = self._channels.pop(channel_id, None)
+        if ch is not None:
+            mine = self._by_consumer.get(ch.consumer_id)
+            if mine is not None:
+                mine.pop(channel_id, None)
+                if not mine:
+                    del self._by_consumer[ch.consumer_id]
+        return ch
+
+    def _renew_consumer(self, consumer_id: str, now: float) -> None:
+        """A consumer's heartbeat renews the lease of every channel it holds."""
+        for cid in self._by_consumer.get(consumer_id, ()):
+            ch = self._channels.get(cid)
+            if ch is not None:
+                ch.renewed_mono = now
+                self._channels.move_to_end(cid)
+
+    def _expire_channels(self, now: float) -> int:
+        """Drop channels whose lease lapsed (oldest first, so the scan stops at the first live one)."""
+        if self.channel_lease_ms <= 0:
+            return 0
+        limit = now - self.channel_lease_ms / 1000.0
+        dead = []
+        for cid, ch in self._channels.items():
+            if ch.renewed_mono > limit:
+                break
+            dead.append(cid)
+        for cid in dead:
+            self._pop_channel(cid)
+        self.channels_evicted += len(dead)
+        return len(dead)
+
+    def _make_room(self, consumer_id: str, now: float) -> None:
+        """Keep the per-consumer and global caps: expired leases go first, then the stalest channel."""
+        mine = self._by_consumer.get(consumer_id)
+        evicted = 0
+        while mine and len(mine) >= self.max_channels_per_consumer:
+            self._pop_channel(next(iter(mine)))
+            evicted += 1
+        if len(self._channels) >= self.max_channels:
+            self._expire_channels(now)
+        while len(self._channels) >= self.max_channels:
+            self._pop_channel(next(iter(self._channels)))
+            evicted += 1
+        if evicted:
+            self.channels_evicted += evicted
+            log.debug("channel caps: dropped %d stale channel(s) to open one for %s", evicted, consumer_id)
 
     def _remove(self, p: _Provider) -> None:
         self._clear_caps(p)
@@ -247,9 +313,22 @@ class Registry:
     # ----------------------------------------------------------------- providers
 
     def register(
-        self, kind: Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
+        self, kind: Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
+        *, may_replace_live: bool = True,
     ) -> str:
         """Register or take over ``id`` (same kind); returns the id (assigned when empty)."""
+        return self.register_ex(kind, id, namespace, capability_md_path, capability_md,
+                                may_replace_live=may_replace_live)[0]
+
+    def register_ex(
+        self, kind: Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
+        *, may_replace_live: bool = True,
+    ) -> tuple[str, str]:
+        """:meth:`register`, returning ``(id, registration_id)``.
+
+        Ownership: a live (not TERMINATED) registration is replaced only when ``may_replace_live`` (the
+        caller holds the deployment token, or the atlas has none: robonix's takeover); otherwise
+        ALREADY_EXISTS names the holder, so a stranger cannot redirect ``nav2``'s consumers."""
         kind = Kind(kind)
         if kind == Kind.UNSPECIFIED:
             raise _invalid("kind: must be primitive, service or skill")
@@ -264,20 +343,27 @@ class Registry:
                         "ALREADY_EXISTS",
                         f"id: {pid!r} is already registered as a {old.kind.label}, not a {kind.label}",
                     )
+                if not may_replace_live and old.state != LifecycleState.TERMINATED:
+                    raise RegistryError(
+                        "ALREADY_EXISTS",
+                        f"id: {pid!r} is held by a live registration ({old.state.label}); it can be replaced "
+                        "once it is TERMINATED or evicted, or by a caller holding the deployment token",
+                    )
                 log.info("register %s: takeover of registration %s", pid, old.registration_id)
                 self._remove(old)
+            reg_id = str(uuid.uuid4())
             self._providers[pid] = _Provider(
                 id=pid,
                 kind=kind,
                 namespace=namespace,
                 capability_md_path=capability_md_path,
                 capability_md=capability_md,
-                registration_id=str(uuid.uuid4()),
+                registration_id=reg_id,
                 last_heartbeat_ms=self._now_ms(),
                 hb_mono=self._clock(),
             )
         log.info("registered %s %s (namespace %s)", kind.label, pid, namespace)
-        return pid
+        return pid, reg_id
 
     def unregister(self, id: str) -> bool:
         """Idempotent; drops the provider's channels too."""
@@ -289,12 +375,23 @@ class Registry:
         log.info("unregistered %s", id)
         return True
 
-    def heartbeat(self, id: str) -> None:
-        """Only refreshes ``last_heartbeat``; a TERMINATED provider stays TERMINATED (robonix rule)."""
+    def heartbeat(self, id: str, registration_id: str = "") -> None:
+        """Only refreshes ``last_heartbeat``; a TERMINATED provider stays TERMINATED (robonix rule).
+
+        With ``registration_id`` (our SDK sends it as metadata) a heartbeat for a registration that was
+        replaced meanwhile is refused with FAILED_PRECONDITION instead of keeping the new holder alive,
+        so the provider learns it lost its id. Channels the provider holds as a consumer are renewed."""
         with self._lock:
             p = self._get(id)
+            if registration_id and registration_id != p.registration_id:
+                raise RegistryError(
+                    "FAILED_PRECONDITION",
+                    f"id: {id!r} was registered again by someone else (registration {p.registration_id}, "
+                    f"yours {registration_id[:64]})",
+                )
             p.last_heartbeat_ms = self._now_ms()
             p.hb_mono = self._clock()
+            self._renew_consumer(id, p.hb_mono)
 
     def set_state(self, id: str, state: LifecycleState, detail: str = "") -> LifecycleState:
         """Store the pushed state (an unusual edge is logged, not refused); returns the previous one."""
@@ -353,6 +450,10 @@ class Registry:
                 raise _invalid("params.mcp.input_schema_json: must be a JSON object")
         if not endpoint and transport != Transport.ROS2:
             raise _invalid(f"endpoint: must not be empty for transport {transport.name}")
+        if transport != Transport.ROS2 and self._endpoint_check is not None:
+            problem = self._endpoint_check(endpoint)
+            if problem:
+                raise _invalid(f"endpoint: {problem}")
 
         with self._lock:
             p = self._get(provider_id, "provider_id")
@@ -496,6 +597,8 @@ class Registry:
                 # consumers that want live providers filter on state, as find_capability does.
                 log.info("connect %s -> %s: provider is TERMINATED (%s)", consumer_id, provider_id,
                          p.state_detail or "no detail")
+            now = self._clock()
+            self._make_room(consumer_id, now)
             ch = _Channel(
                 channel_id="ch-" + uuid.uuid4().hex,
                 consumer_id=consumer_id,
@@ -505,13 +608,16 @@ class Registry:
                 endpoint=cap.endpoint,
                 params=cap.params,
                 opened_ms=self._now_ms(),
+                renewed_mono=now,
             )
             self._channels[ch.channel_id] = ch
+            self._by_consumer.setdefault(consumer_id, OrderedDict())[ch.channel_id] = None
+            self._renew_consumer(consumer_id, now)  # using the atlas renews the consumer's other channels
         return Channel(ch.channel_id, ch.endpoint, ch.params, provider_id, contract_id, transport)
 
     def disconnect(self, channel_id: str) -> bool:
         with self._lock:
-            return self._channels.pop(channel_id, None) is not None
+            return self._pop_channel(channel_id) is not None
 
     def channel_count(self, provider_id: str | None = None) -> int:
         with self._lock:
@@ -533,11 +639,16 @@ class Registry:
 
     def sweep(self) -> tuple[list[str], list[str]]:
         """Mark lapsed providers TERMINATED (dropping their channels) and remove TERMINATED records past
-        ``timeout + gc``. Returns (evicted ids, removed ids). A timeout of 0 disables both."""
+        ``timeout + gc``; drop channels whose lease lapsed. Returns (evicted ids, removed ids). A heartbeat
+        timeout of 0 disables the provider part."""
         timeout = self.heartbeat_timeout_ms
+        now = self._clock()
+        with self._lock:
+            expired = self._expire_channels(now)
+        if expired:
+            log.info("%d channel lease(s) lapsed (> %d ms without renewal)", expired, self.channel_lease_ms)
         if timeout <= 0:
             return [], []
-        now = self._clock()
         evicted: list[str] = []
         removed: list[str] = []
         with self._lock:
@@ -593,6 +704,8 @@ class Registry:
                         ],
                     }
                 )
+            newest = list(self._channels.values())[-MAX_SNAPSHOT_CHANNELS:]
+            channels_total = len(self._channels)
             channels = [
                 {
                     "channel_id": ch.channel_id,
@@ -603,12 +716,14 @@ class Registry:
                     "endpoint": ch.endpoint,
                     "opened_ms": ch.opened_ms,
                 }
-                for ch in self._channels.values()
+                for ch in newest
             ]
         return {
             "providers": providers,
             "capabilities": caps,
             "channels": channels,
+            "channels_total": channels_total,
+            "channel_lease_ms": self.channel_lease_ms,
             "contracts": len(self.catalogue),
             "heartbeat_timeout_ms": self.heartbeat_timeout_ms,
             "now_ms": self._now_ms(),

@@ -22,19 +22,31 @@ import grpc
 from atlas import settings
 from atlas.catalogue import Catalogue
 from atlas.registry import Registry, RegistryError
+from atlas.trust import Trust, parse_allowed_hosts
+from robonix_api import auth
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
 from robonix_api.types import Kind, params_from_pb, params_to_pb
 
 log = logging.getLogger("atlas")
+#: Register answers carry the new registration's id in this trailing metadata (robonix's RegisterResponse
+#: has only ``id``); our SDK sends it back on Heartbeat to learn when its id was taken over.
+REGISTRATION_ID_KEY = "robonix-registration-id"
 
 DEFAULT_LISTEN = settings.DEFAULT_LISTEN
 
 
 class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
-    """Message <-> registry translation only."""
+    """Message <-> registry translation, plus the token check of :class:`atlas.trust.Trust`."""
 
-    def __init__(self, registry: Registry) -> None:
+    def __init__(self, registry: Registry, trust: Trust | None = None) -> None:
         self.registry = registry
+        self.trust = trust or Trust()
+
+    def _guard(self, context: grpc.ServicerContext, rpc: str) -> None:
+        bad = self.trust.refusal(rpc, context.invocation_metadata())
+        if bad is not None:
+            log.warning("%s refused from %s: %s", rpc, context.peer(), bad[0])
+            context.abort(getattr(grpc.StatusCode, bad[0]), bad[1])
 
     @staticmethod
     def _run(context: grpc.ServicerContext, fn: Any, *args: Any, **kwargs: Any) -> Any:
@@ -43,41 +55,49 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         except RegistryError as exc:
             context.abort(getattr(grpc.StatusCode, exc.code, grpc.StatusCode.UNKNOWN), exc.message)
 
-    def _register(self, kind: Kind, req: Any, context: grpc.ServicerContext) -> Any:
-        pid = self._run(
+    def _register(self, kind: Kind, req: Any, context: grpc.ServicerContext, rpc: str) -> Any:
+        self._guard(context, rpc)
+        pid, reg_id = self._run(
             context,
-            self.registry.register,
+            self.registry.register_ex,
             kind,
             req.id,
             req.namespace,
             req.capability_md_path,
             req.capability_md,
+            may_replace_live=self.trust.holds_token(context.invocation_metadata()),
         )
+        context.set_trailing_metadata(((REGISTRATION_ID_KEY, reg_id),))
         return atlas_pb2.RegisterResponse(id=pid)
 
     def RegisterPrimitive(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
-        return self._register(Kind.PRIMITIVE, request, context)
+        return self._register(Kind.PRIMITIVE, request, context, "RegisterPrimitive")
 
     def RegisterService(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
-        return self._register(Kind.SERVICE, request, context)
+        return self._register(Kind.SERVICE, request, context, "RegisterService")
 
     def RegisterSkill(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
-        return self._register(Kind.SKILL, request, context)
+        return self._register(Kind.SKILL, request, context, "RegisterSkill")
 
     def Unregister(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+        self._guard(context, "Unregister")
         return atlas_pb2.UnregisterResponse(
             was_present=self._run(context, self.registry.unregister, request.id)
         )
 
     def Heartbeat(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
-        self._run(context, self.registry.heartbeat, request.id)
+        self._guard(context, "Heartbeat")
+        reg_id = next((str(v) for k, v in context.invocation_metadata() or () if k == REGISTRATION_ID_KEY), "")
+        self._run(context, self.registry.heartbeat, request.id, reg_id)
         return atlas_pb2.HeartbeatResponse()
 
     def SetLifecycleState(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+        self._guard(context, "SetLifecycleState")
         prev = self._run(context, self.registry.set_state, request.id, request.state, request.detail)
         return atlas_pb2.SetLifecycleStateResponse(previous_state=int(prev))
 
     def DeclareCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+        self._guard(context, "DeclareCapability")
         params = params_from_pb(request.params) if request.HasField("params") else None
         ep = self._run(
             context,
@@ -107,6 +127,7 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         return resp
 
     def ConnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+        self._guard(context, "ConnectCapability")
         ch = self._run(
             context,
             self.registry.connect,
@@ -121,6 +142,7 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         return resp
 
     def DisconnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+        self._guard(context, "DisconnectCapability")
         return atlas_pb2.DisconnectCapabilityResponse(
             was_open=self._run(context, self.registry.disconnect, request.channel_id)
         )
@@ -178,13 +200,22 @@ class AtlasServer:
         heartbeat_timeout_ms: int = 90000,
         eviction_interval_ms: int = 10000,
         gc_after_terminated_ms: int = 600000,
+        token: str = "",
+        allowed_hosts: tuple[str, ...] | list[str] | str | None = None,
+        **registry_options: Any,
     ) -> None:
+        """``token`` "" = no authentication (robonix's atlas); ``allowed_hosts`` adds hosts beyond
+        loopback that gRPC/MCP endpoints may name ("*" = any). ``registry_options`` go to
+        :class:`atlas.registry.Registry` (channel lease and caps)."""
         self.listen = listen
         self.eviction_interval_ms = int(eviction_interval_ms)
+        self.trust = Trust(token=token or "", allowed_hosts=parse_allowed_hosts(allowed_hosts))
         self.registry = Registry(
             Catalogue.load([Path(r) for r in catalogue_roots] if catalogue_roots else None),
             heartbeat_timeout_ms=heartbeat_timeout_ms,
             gc_after_terminated_ms=gc_after_terminated_ms,
+            endpoint_check=self.trust.endpoint_problem,
+            **registry_options,
         )
         self._server: grpc.Server | None = None
         self._address = ""
@@ -208,7 +239,7 @@ class AtlasServer:
             # Without this, gRPC sets SO_REUSEPORT and a second atlas would share a busy port silently.
             options=[("grpc.so_reuseport", 0)],
         )
-        atlas_pb2_grpc.add_AtlasServicer_to_server(AtlasServicer(self.registry), server)
+        atlas_pb2_grpc.add_AtlasServicer_to_server(AtlasServicer(self.registry, self.trust), server)
         try:
             bound = server.add_insecure_port(f"{host}:{port}")
         except RuntimeError as exc:
@@ -219,15 +250,16 @@ class AtlasServer:
         self._server = server
         self._address = f"{host}:{bound}"
         self._stop.clear()
-        if self.registry.heartbeat_timeout_ms > 0 and self.eviction_interval_ms > 0:
+        if self.eviction_interval_ms > 0:  # heartbeat eviction (when enabled) and channel leases
             self._reaper = threading.Thread(target=self._reap, name="atlas-reaper", daemon=True)
             self._reaper.start()
         log.info(
-            "atlas serving on %s (%d contracts, heartbeat timeout %d ms, eviction every %d ms)",
+            "atlas serving on %s (%d contracts, heartbeat timeout %d ms, eviction every %d ms, %s)",
             self._address,
             len(self.registry.catalogue),
             self.registry.heartbeat_timeout_ms,
             self.eviction_interval_ms,
+            "deployment token required for changes" if self.trust.token else "no authentication",
         )
         return self._address
 
@@ -271,6 +303,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--eviction-interval-ms", type=int, default=None, help="default 10000")
     ap.add_argument("--gc-after-terminated-ms", type=int, default=None, help="default 600000")
     ap.add_argument("--log-level", default=None, help="env ROBONIX_LOG_LEVEL, default INFO")
+    ap.add_argument("--allowed-hosts", default=None, metavar="H1,H2",
+                    help="hosts besides loopback that gRPC/MCP endpoints may name, '*' for any "
+                         "(env ROBONIX_ATLAS_ALLOWED_HOSTS)")
     ap.add_argument(
         "--config-json", default=None, metavar="JSON",
         help='settings as one JSON object, as robonix\'s rbnx passes system.atlas: {"listen": ..., "log": ...}; '
@@ -281,7 +316,7 @@ def main(argv: list[str] | None = None) -> int:
         cfg = settings.resolve(
             {"listen": a.listen, "capabilities": a.capabilities, "heartbeat_timeout_ms": a.heartbeat_timeout_ms,
              "eviction_interval_ms": a.eviction_interval_ms, "gc_after_terminated_ms": a.gc_after_terminated_ms,
-             "log_level": a.log_level},
+             "log_level": a.log_level, "allowed_hosts": a.allowed_hosts},
             a.config_json,
         )
     except ValueError as exc:
@@ -302,6 +337,8 @@ def main(argv: list[str] | None = None) -> int:
             heartbeat_timeout_ms=cfg.heartbeat_timeout_ms,
             eviction_interval_ms=cfg.eviction_interval_ms,
             gc_after_terminated_ms=cfg.gc_after_terminated_ms,
+            token=auth.current_token() if cfg.auth != "none" else "",
+            allowed_hosts=cfg.allowed_hosts,
         )
         address = server.start()
     except (ValueError, OSError) as exc:

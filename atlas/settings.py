@@ -29,6 +29,7 @@ _ENV: dict[str, tuple[str, Any]] = {
     "eviction_interval_ms": ("ROBONIX_ATLAS_EVICTION_INTERVAL_MS", 10000),
     "gc_after_terminated_ms": ("ROBONIX_ATLAS_GC_AFTER_TERMINATED_MS", 600000),
     "log_level": ("ROBONIX_LOG_LEVEL", "INFO"),
+    "allowed_hosts": ("ROBONIX_ATLAS_ALLOWED_HOSTS", ""),
 }
 _LEVELS = ("trace", "debug", "info", "warn", "warning", "error", "critical", "off")
 
@@ -45,8 +46,11 @@ class JsonSettings(BaseModel):
     heartbeat_timeout_ms: int | None = Field(default=None, ge=0, le=86_400_000)
     eviction_interval_ms: int | None = Field(default=None, ge=10, le=3_600_000)
     gc_after_terminated_ms: int | None = Field(default=None, ge=0, le=604_800_000)
+    allowed_hosts: str | list[str] | None = None
+    # rbnx's deploy option (the token itself only ever travels in $ROBONIX_DEPLOY_TOKEN, never in argv)
+    auth: str | None = Field(default=None, pattern="^(token|none)$")
 
-    @field_validator("capabilities")
+    @field_validator("capabilities", "allowed_hosts")
     @classmethod
     def _join(cls, v: str | list[str] | None) -> str | None:
         return ",".join(v) if isinstance(v, list) else v
@@ -60,6 +64,8 @@ class AtlasSettings:
     eviction_interval_ms: int
     gc_after_terminated_ms: int
     log_level: str
+    allowed_hosts: tuple[str, ...] = ()
+    auth: str = "token"  # "none": ignore $ROBONIX_DEPLOY_TOKEN, accept every change (robonix's atlas)
     ignored_keys: tuple[str, ...] = ()  # --config-json keys we do not know (logged once logging is up)
 
 
@@ -119,8 +125,11 @@ def resolve(flags: dict[str, Any], config_json: str | None) -> AtlasSettings:
         else:
             values[key] = _env(env, default)
     roots = [Path(p.strip()) for p in str(values["capabilities"]).split(",") if p.strip()] or None
+    from atlas.trust import parse_allowed_hosts
+
+    hosts = parse_allowed_hosts(str(values["allowed_hosts"] or ""))
     return AtlasSettings(listen=values["listen"], catalogue_roots=roots,
                          heartbeat_timeout_ms=int(values["heartbeat_timeout_ms"]),
                          eviction_interval_ms=int(values["eviction_interval_ms"]),
                          gc_after_terminated_ms=int(values["gc_after_terminated_ms"]),
-                         log_level=str(values["log_level"]), ignored_keys=tuple(sorted(js.model_extra or {})))
+                         log_level=str(values["log_level"]), allowed_hosts=hosts, auth=js.auth or "token", ignored_keys=tuple(sorted(js.model_extra or {})))

@@ -30,6 +30,7 @@ from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
 from nav2_wrapper.core.grace import InputGrace
 from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
 from nav2_wrapper.core.warmup import ready as kernels_ready
+from nav2_wrapper.core.warmup import wait_finished as kernels_wait
 from robonix_api.dds import FrameNotFoundError, Path, TfError, Twist
 from robonix_api.dds.convert import header, pose_stamped, twist
 from robonix_api.geometry import compose
@@ -252,6 +253,8 @@ class NavLoop:
             now = clock.now()
             try:
                 self._watch_clock(now)
+                if reached and not kernels_wait(WAIT_SLICE_S):
+                    continue  # a cold numba compile is running: wait outside the lock (status stays answered)
                 if reached:
                     self._step(now)
                     if self._spans is not None:

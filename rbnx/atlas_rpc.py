@@ -13,7 +13,7 @@ from typing import Any
 
 import grpc
 
-from robonix_api import telemetry
+from robonix_api import auth, telemetry
 from robonix_api.proto_gen import (
     atlas_pb2,
     atlas_pb2_grpc,
@@ -69,7 +69,7 @@ class Atlas:
     def __init__(self, addr: str, timeout: float = 5.0) -> None:
         self.addr = addr
         self.timeout = timeout
-        self._ch = grpc.insecure_channel(addr, options=GRPC_OPTIONS)
+        self._ch = auth.channel(addr, options=GRPC_OPTIONS)  # carries $ROBONIX_DEPLOY_TOKEN when set
         self._stub = atlas_pb2_grpc.AtlasStub(self._ch)
 
     def close(self) -> None:
@@ -167,7 +167,7 @@ class Driver:
     def __init__(self, endpoint: str, params: atlas_pb2.TransportParams | None = None) -> None:
         self.endpoint = endpoint.removeprefix("grpc://").removeprefix("http://")
         self.path = driver_method_path(params)
-        self._ch = grpc.insecure_channel(self.endpoint, options=GRPC_OPTIONS)
+        self._ch = auth.channel(self.endpoint, options=GRPC_OPTIONS)
         self._call = self._ch.unary_unary(self.path, request_serializer=lifecycle_pb2.Driver_Request.SerializeToString,
                                           response_deserializer=lifecycle_pb2.Driver_Response.FromString)
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from rbnx import procs
+from rbnx import deploytoken, procs
 from rbnx.atlas_rpc import Atlas
 from rbnx.models import ResolvedDeploy, ResolvedEntry
 from rbnx.procs import ProcGroup, proc_start_ticks, spawn, tail
@@ -249,6 +249,13 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
     state: dict[str, Any] = {"pid": os.getpid(), "deploy": str(deploy.path), "log_dir": str(opts.log_dir.resolve()),
                              "started": time.time(), "atlas": None, "atlas_proc": None, "children": []}
     state["start_ticks"] = proc_start_ticks(os.getpid())
+    # The deployment token (system.atlas.auth: token, the default): atlas and children get it in their
+    # environment, this process adopts it (gateway, Driver calls), the 0600 state file records it.
+    token = deploytoken.new_token() if deploy.atlas_auth != "none" else ""
+    deploytoken.adopt(token)
+    base_env = deploytoken.boot_env(deploy.env, token, deploy.atlas_allowed_hosts)
+    if token:
+        state["token"] = token
 
     save_lock = threading.Lock()  # the gateway thread records its URL too
 
@@ -270,9 +277,9 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         t0 = time.monotonic()
         save()
         listen = deploy.atlas_listen
-        env = dict(deploy.env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
+        env = dict(base_env, RBNX_DEPLOY_NAME=deploy.name)  # runners key RBNX_RUN_DIR by it + the atlas
         try:
-            atlas_group = spawn_atlas(listen, deploy.env, opts.log_dir / "atlas.log", deploy.atlas_log)
+            atlas_group = spawn_atlas(listen, base_env, opts.log_dir / "atlas.log", deploy.atlas_log)
             if opts.parallel and _split(listen)[1] != 0:  # address known before the atlas is up
                 orch = Orchestrator(deploy.entries, env, client_addr(listen), opts, sig.stop, on_change=save)
                 orch.start_all()

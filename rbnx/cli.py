@@ -106,9 +106,10 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("-o", "--output", default="map.png", help="PNG path (default map.png)")
     mc.add_argument("--timeout", type=float, default=30.0, help="RPC timeout in seconds")
 
-    from rbnx import cmd_agents, cmd_demo, cmd_init, cmd_nav, record, replay
+    from rbnx import cmd_agents, cmd_demo, cmd_init, cmd_nav, cmd_token, record, replay
     from rbnx.dashboard import cli as dashboard_cli
     cmd_agents.add_parser(sub)
+    cmd_token.add_parser(sub)
     cmd_demo.add_parser(sub)
     cmd_nav.add_parsers(sub)
     record.add_parser(sub)
@@ -125,7 +126,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         "boot": cmd_lifecycle.cmd_boot, "deploy": cmd_lifecycle.cmd_boot, "shutdown": cmd_lifecycle.cmd_shutdown,
         "start": cmd_lifecycle.cmd_start, "logs": cmd_lifecycle.cmd_logs, "build": cmd_build.cmd_build,
         "validate": cmd_validate.cmd_validate, "lifecycle": cmd_agents.cmd_lifecycle_verb,
-        "init": cmd_init.cmd_init,
+        "init": cmd_init.cmd_init, "token": _cmd_token,
     }
     if args.cmd == "demo":
         from rbnx import cmd_demo
@@ -144,9 +145,46 @@ def _dispatch(args: argparse.Namespace) -> int:
         return remote[args.cmd](args, atlas)
 
 
+def _cmd_token(args: argparse.Namespace) -> int:
+    from rbnx import cmd_token
+
+    return cmd_token.cmd_token(args)
+
+
+#: Commands that make their own token (boot), need none, or print it.
+_NO_TOKEN = frozenset({"boot", "deploy", "demo", "validate", "init", "build", "token"})
+
+
+def _adopt_token(args: argparse.Namespace) -> None:
+    """Take the deployment token of the boot this command talks to (its state file; else an exported
+    $ROBONIX_DEPLOY_TOKEN); the SDK's clients then send it."""
+    if args.cmd in _NO_TOKEN:
+        return
+    from rbnx import deploytoken
+
+    token = deploytoken.token_for_atlas(getattr(args, "endpoint", None) or args.atlas)
+    if token:
+        deploytoken.adopt(token)
+        return
+    path = getattr(args, "file", None)
+    if path and args.cmd in ("shutdown", "lifecycle", "logs", "dashboard"):
+        from pathlib import Path
+
+        from rbnx.deployment import StateNotFound, locate_state
+        from rbnx.statefile import read_state
+
+        try:
+            token = deploytoken.token_of_state(read_state(locate_state(Path(path), args.atlas)))
+        except (StateNotFound, OSError, ValueError):
+            return  # the command reports a missing boot in its own words
+        if token:
+            deploytoken.adopt(token)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
+        _adopt_token(args)
         return _dispatch(args)
     except ManifestProblems as mp:
         for line in mp.lines:

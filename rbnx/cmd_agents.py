@@ -78,9 +78,9 @@ def _request(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
 
 
 async def _via_gateway(url: str, tool: str, arguments: dict[str, Any]) -> tuple[bool, str, Any]:
-    from mcp import Client
+    from robonix_api.auth import mcp_client
 
-    async with Client(url, read_timeout_seconds=300) as client:
+    async with mcp_client(url, read_timeout_seconds=300) as client:
         r = await client.call_tool(tool, arguments)
     text = "".join(getattr(c, "text", "") for c in r.content)
     return not r.is_error, text, r.structured_content

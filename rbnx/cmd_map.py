@@ -15,6 +15,7 @@ from pathlib import Path
 import grpc
 
 from rbnx.atlas_rpc import GRPC_OPTIONS, STATE_NAMES, TRANSPORT_NAMES, Atlas, AtlasError
+from robonix_api import auth
 from robonix_api.proto_gen import atlas_pb2, map_pb2, robonix_contracts_pb2_grpc
 
 MAP_CARD = "robonix/service/map/map_card"
@@ -49,7 +50,7 @@ def _write(path: Path, data: bytes) -> None:
 def cmd_map_card(args: argparse.Namespace, atlas: Atlas) -> int:
     pid = _provider(atlas, args.provider)
     endpoint, _ = atlas.endpoint(pid, MAP_CARD, atlas_pb2.TRANSPORT_GRPC)
-    with grpc.insecure_channel(endpoint, options=GRPC_OPTIONS) as ch:
+    with auth.channel(endpoint, options=GRPC_OPTIONS) as ch:
         stub = robonix_contracts_pb2_grpc.RobonixServiceMapMapCardStub(ch)
         try:
             card = stub.GetMapCard(map_pb2.GetMapCard_Request(), timeout=args.timeout)

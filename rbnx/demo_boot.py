@@ -21,6 +21,7 @@ from typing import Any
 from rbnx.atlas_rpc import STATE_NAMES, Atlas, AtlasError
 from rbnx.procs import pid_alive, stop_recorded, tail
 from rbnx.statefile import read_state
+from robonix_api.auth import TOKEN_ENV
 
 PR_SET_PDEATHSIG = 1
 
@@ -112,6 +113,8 @@ class BootChild:
                                 f"before the system was up (log {self.boot_log})", self.log_tail())
             st = self.state() or {}
             self.atlas = st.get("atlas") or self.atlas
+            if st.get("token"):  # the deployment token: the demo's own calls (goals, map card) carry it
+                os.environ[TOKEN_ENV] = str(st["token"])
             for child in st.get("children") or []:
                 if child.get("state") == "failed":
                     log = Path(child.get("log") or "")

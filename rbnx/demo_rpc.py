@@ -13,6 +13,7 @@ import grpc
 from rbnx.atlas_rpc import GRPC_OPTIONS
 from rbnx.demo_boot import DemoError
 from rbnx.demo_goals import Goal
+from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import map_pb2, navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
@@ -79,7 +80,7 @@ class DemoRpc:
     def _stub(self, contract: str, stub_cls: Any) -> Any:
         ep = self._endpoint(contract)
         if ep not in self._channels:
-            self._channels[ep] = grpc.insecure_channel(ep, options=GRPC_OPTIONS)
+            self._channels[ep] = auth.channel(ep, options=GRPC_OPTIONS)
         return stub_cls(self._channels[ep])
 
     def _call(self, contract: str, stub_cls: Any, method: str, req: Any, timeout: float | None = None) -> Any:

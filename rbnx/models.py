@@ -109,6 +109,20 @@ class AtlasSystem(BaseModel):
     model_config = ConfigDict(extra="allow")
     listen: str = DEFAULT_ATLAS_LISTEN
     log: str | None = None
+    # "token": rbnx boot makes a deployment token and every change needs it; "none": robonix's open atlas
+    auth: Literal["token", "none"] = "token"
+    # hosts besides loopback that declared gRPC/MCP endpoints may name ("*" = any), for multi-host setups
+    allowed_hosts: list[str] = Field(default_factory=list, max_length=256)
+
+    @field_validator("allowed_hosts")
+    @classmethod
+    def _hosts_ok(cls, v: list[str]) -> list[str]:
+        from atlas.trust import parse_allowed_hosts
+
+        try:
+            return list(parse_allowed_hosts(v))
+        except ValueError as exc:  # the field is named by the caller already
+            raise ValueError(str(exc).removeprefix("allowed_hosts: ")) from None
 
     @field_validator("listen")
     @classmethod
@@ -285,6 +299,8 @@ class ResolvedDeploy:
     atlas_log: str | None
     entries: list[ResolvedEntry]
     warnings: list[str] = field(default_factory=list)
+    atlas_auth: str = "token"
+    atlas_allowed_hosts: list[str] = field(default_factory=list)
 
 
 def packages_dir(deploy_dir: Path, env: Mapping[str, str]) -> Path:
@@ -390,4 +406,5 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     if problems:
         raise ManifestProblems(problems)
     atlas = model.system.atlas
-    return ResolvedDeploy(path.resolve(), model.name, dict(env), atlas.listen, atlas.log, entries, warnings)
+    return ResolvedDeploy(path.resolve(), model.name, dict(env), atlas.listen, atlas.log, entries, warnings,
+                          atlas.auth, list(atlas.allowed_hosts))

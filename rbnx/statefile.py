@@ -88,17 +88,25 @@ def run_dir(name: str, atlas_addr: str, env: dict[str, str] | None = None) -> Pa
 
 
 def write_state(path: Path, data: dict[str, Any], copy_to: Path | None = None) -> None:
-    """Atomic write (tmp + rename) so a reader never sees half a file."""
+    """Atomic write (tmp + rename) so a reader never sees half a file; mode 0600 (it holds the deployment
+    token), the copy too."""
     path.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps(data, indent=2)
     tmp = path.with_suffix(f".tmp{os.getpid()}")
-    tmp.write_text(text)
+    _write_private(tmp, text)
     os.replace(tmp, path)
     if copy_to is not None:
         try:
-            copy_to.write_text(text)
+            _write_private(copy_to, text)
         except OSError:
             pass
+
+
+def _write_private(path: Path, text: str) -> None:
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.fchmod(fd, 0o600)  # an existing file keeps its mode through O_CREAT
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
 
 
 def read_state(path: Path) -> dict[str, Any] | None:

@@ -16,6 +16,7 @@ from typing import Any
 
 import grpc
 
+from robonix_api import auth
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
 from robonix_api.types import (
     Capability,
@@ -36,6 +37,8 @@ log = logging.getLogger(__name__)
 DEFAULT_ADDRESS = "127.0.0.1:50051"
 #: Per-call deadline; generous because a loaded CI box can stall a loopback call for a while.
 DEFAULT_TIMEOUT_S = 10.0
+#: Trailing metadata of our atlas's Register answers; sent back on Heartbeat (see atlas.server).
+REGISTRATION_ID_KEY = "robonix-registration-id"
 
 
 def default_address() -> str:
@@ -79,8 +82,12 @@ class HeartbeatHandle(threading.Thread):
                 unavailable_logged = False
             except grpc.RpcError as exc:
                 code = exc.code() if hasattr(exc, "code") else None
-                if code == grpc.StatusCode.NOT_FOUND:
-                    log.warning("heartbeat %s: atlas does not know us (restarted?)", self.id)
+                if code in (grpc.StatusCode.NOT_FOUND, grpc.StatusCode.FAILED_PRECONDITION):
+                    if code == grpc.StatusCode.NOT_FOUND:
+                        log.warning("heartbeat %s: atlas does not know us (restarted?)", self.id)
+                    else:
+                        log.error("heartbeat %s: OUR REGISTRATION WAS REPLACED by another Register of this id "
+                                  "(%s)", self.id, exc.details() if hasattr(exc, "details") else exc)
                     if self._on_not_found is not None:
                         try:
                             self._on_not_found()
@@ -108,8 +115,11 @@ class AtlasClient:
         self._address = address
         self._lock = threading.Lock()
         self._channel: grpc.Channel | None = None
+        self._raw_channel: grpc.Channel | None = None
         self._stub: atlas_pb2_grpc.AtlasStub | None = None
         self.timeout = DEFAULT_TIMEOUT_S
+        #: provider id -> registration id our atlas answered with (empty from robonix's atlas)
+        self.registration_ids: dict[str, str] = {}
 
     # ----------------------------------------------------------------- connection
 
@@ -128,14 +138,16 @@ class AtlasClient:
             if self._stub is None:
                 if self._address is None:
                     self._address = default_address()
-                self._channel = grpc.insecure_channel(self._address, options=[("grpc.enable_http_proxy", 0)])
+                # The deployment token ($ROBONIX_DEPLOY_TOKEN) rides on every call when set (robonix_api.auth).
+                self._raw_channel = grpc.insecure_channel(self._address, options=[("grpc.enable_http_proxy", 0)])
+                self._channel = grpc.intercept_channel(self._raw_channel, auth.TokenClientInterceptor())
                 self._stub = atlas_pb2_grpc.AtlasStub(self._channel)
             return self._stub
 
     def close(self) -> None:
         """Close the channel; the client reconnects lazily if used again."""
         with self._lock:
-            channel, self._channel, self._stub = self._channel, None, None
+            channel, self._raw_channel, self._channel, self._stub = self._raw_channel, None, None, None
         if channel is not None:
             channel.close()
 
@@ -148,8 +160,8 @@ class AtlasClient:
     def wait_ready(self, timeout: float = 10.0) -> None:
         """Block until the atlas channel is connected; ``grpc.FutureTimeoutError`` otherwise."""
         self.stub  # noqa: B018 (creates the channel)
-        assert self._channel is not None
-        grpc.channel_ready_future(self._channel).result(timeout=timeout)
+        assert self._raw_channel is not None
+        grpc.channel_ready_future(self._raw_channel).result(timeout=timeout)
 
     # ----------------------------------------------------------------- providers
 
@@ -173,7 +185,10 @@ class AtlasClient:
         req = atlas_pb2.RegisterRequest(
             id=id, namespace=namespace, capability_md_path=capability_md_path, capability_md=capability_md
         )
-        return rpc(req, timeout=self.timeout).id
+        resp, call = rpc.with_call(req, timeout=self.timeout)
+        reg_id = next((str(v) for k, v in call.trailing_metadata() or () if k == REGISTRATION_ID_KEY), "")
+        self.registration_ids[resp.id] = reg_id
+        return resp.id
 
     def register_primitive(
         self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
@@ -198,8 +213,13 @@ class AtlasClient:
         self.heartbeat_or_raise(id)
 
     def heartbeat_or_raise(self, id: str) -> None:
-        """One heartbeat, errors raised (``ATLAS.heartbeat`` swallows them, as robonix-api does)."""
-        self.stub.Heartbeat(atlas_pb2.HeartbeatRequest(id=id), timeout=self.timeout)
+        """One heartbeat, errors raised (``ATLAS.heartbeat`` swallows them, as robonix-api does).
+
+        When this client registered ``id`` it sends the registration id along, and our atlas answers
+        FAILED_PRECONDITION once somebody else has registered ``id`` since (the registration was replaced)."""
+        reg_id = self.registration_ids.get(id, "")
+        md = ((REGISTRATION_ID_KEY, reg_id),) if reg_id else None
+        self.stub.Heartbeat(atlas_pb2.HeartbeatRequest(id=id), timeout=self.timeout, metadata=md)
 
     def set_state(self, id: str, state: LifecycleState | int | str, detail: str = "") -> LifecycleState:
         """Push a lifecycle state; returns the previous one."""

@@ -24,6 +24,7 @@ from google.protobuf.message import Message
 from mcp.server import Server
 from mcp.shared.exceptions import MCPError
 
+from robonix_api import auth
 from robonix_api.contracts import ContractSpec
 from robonix_api.grpc_contracts import StatusError, invoke
 from robonix_api.mcp_tools import MCP_PATH, tool_shape
@@ -76,6 +77,16 @@ class McpTool:
                                     structured_content=data)
 
 
+def token_refusal(ctx: Any, contract_id: str, tool_name: str) -> str | None:
+    """With a deployment token set, a tool of a state-changing contract wants it in the HTTP request
+    (``Authorization: Bearer <token>``); None when the call may run, else the error text."""
+    if auth.is_read_only(contract_id):
+        return None
+    request = getattr(ctx, "request", None)
+    bad = auth.refusal(auth.token_from_headers(getattr(request, "headers", None)), tool_name)
+    return bad[1] if bad else None
+
+
 def _tool_error(text: str) -> types.CallToolResult:
     return types.CallToolResult(content=[types.TextContent(type="text", text=text)], is_error=True)
 
@@ -106,6 +117,9 @@ class McpToolServer:
         if tool is None:
             raise MCPError(code=types.INVALID_PARAMS, message=f"unknown tool {params.name!r}; "
                            f"known: {sorted(self._tools)}")
+        refused = token_refusal(ctx, tool.spec.id, tool.name)
+        if refused:
+            return _tool_error(refused)
         # Handlers are plain blocking functions; keep the event loop free.
         return await anyio.to_thread.run_sync(tool.call, dict(params.arguments or {}))
 

@@ -22,7 +22,7 @@ from typing import Any, TypeVar
 
 import grpc
 
-from robonix_api import netutil, pkg
+from robonix_api import auth, netutil, pkg
 from robonix_api.contracts import ContractSpec, builtin_contract
 from robonix_api.driver import DriverServicer, Lifecycle, add_namespace_driver, namespace_driver_contract
 from robonix_api.grpc_contracts import add_servicer, build_servicer, generated_servicer
@@ -98,6 +98,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._grpc_server: grpc.Server | None = None
         self._mcp_server: Any = None
         self._hb_thread: threading.Thread | None = None
+        self.registration_replaced = 0  # how often a heartbeat found our atlas record taken over
         self.grpc_endpoint = ""
         self.mcp_url = ""
         self._grpc_descriptions: dict[str, str] = {}
@@ -341,7 +342,14 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                 if self._evicted_while_alive():
                     self._reregister()
             except Exception as exc:
-                if _status_code(exc) == grpc.StatusCode.NOT_FOUND:
+                code = _status_code(exc)
+                if code == grpc.StatusCode.FAILED_PRECONDITION:
+                    # Our atlas refuses the heartbeat of a registration somebody else replaced: say so
+                    # loudly and take the id back (we hold the deployment token when one is set).
+                    log.error("provider %s: ITS ATLAS REGISTRATION WAS REPLACED by another Register of the same "
+                              "id (%s); re-registering", self.id, exc)
+                    self.registration_replaced += 1
+                if code in (grpc.StatusCode.NOT_FOUND, grpc.StatusCode.FAILED_PRECONDITION):
                     try:
                         self._reregister()
                         failing = False
@@ -361,7 +369,8 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._register(wait_s=REGISTER_WAIT_S)
         bind = netutil.bind_host()
         host = netutil.advertise_host(bind, self._atlas_address())
-        server = grpc.server(futures.ThreadPoolExecutor(max_workers=8, thread_name_prefix="rbnx-grpc"))
+        server = grpc.server(futures.ThreadPoolExecutor(max_workers=8, thread_name_prefix="rbnx-grpc"),
+                             interceptors=[auth.TokenServerInterceptor(self._token_protected())])
         robonix_contracts_pb2_grpc.add_RobonixLifecycleDriverServicer_to_server(
             DriverServicer(self.lifecycle), server)
         ns_driver_service = add_namespace_driver(self.lifecycle, self.namespace, server)
@@ -394,6 +403,16 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         log.info("provider %s (%s) up: grpc %s%s", self.id, self.KIND.label, self.grpc_endpoint,
                  f", mcp {self.mcp_url}" if self.mcp_url else "")
         self._ready.set()
+
+    def _token_protected(self) -> Callable[[str], bool]:
+        """Which gRPC methods want the deployment token (when one is set): all but read-only contracts'.
+
+        Deny by default: the Driver, every state-changing contract and anything unknown need it."""
+        open_paths = frozenset(
+            f"/robonix.contracts.{spec.service_name}/{spec.method_name}"
+            for spec in (builtin_contract(cid) for cid in self._grpc_handlers if auth.is_read_only(cid))
+        )
+        return lambda method: method not in open_paths
 
     def _declare_namespace_driver(self, service_name: str) -> None:
         """Also declare ``<namespace>/driver`` (robonix-api's name for the same Driver).

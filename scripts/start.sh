@@ -27,6 +27,8 @@ for var in RBNX_INSTANCE_NAME RBNX_DEPLOY_MANAGED ROBONIX_ATLAS ROBONIX_PROVIDER
            ROBONIX_ADVERTISE_HOST ROS_DOMAIN_ID RMW_IMPLEMENTATION CYCLONEDDS_URI ROBONIX_HEARTBEAT_PERIOD_S; do
   if [ -n "${!var:-}" ]; then fwd+=(-e "$var=${!var}"); fi
 done
+# The deployment token: by name only, so the engine copies it from this environment and it never shows in argv.
+if [ -n "${ROBONIX_DEPLOY_TOKEN:-}" ]; then fwd+=(-e ROBONIX_DEPLOY_TOKEN); fi
 mounts=()
 # A file:// CYCLONEDDS_URI must exist inside the container too: mount it read-only at the same path.
 if [[ "${CYCLONEDDS_URI:-}" == file://* ]]; then

@@ -38,11 +38,23 @@ def compile_kernels() -> float:
 
 
 _done = threading.Event()
+_finished = threading.Event()  # set when the background compile ended, compiled or failed
 
 
 def ready() -> bool:
     """The kernels are compiled or loaded in this process (a plan will not wait for numba)."""
     return _done.is_set()
+
+
+def wait_finished(timeout: float) -> bool:
+    """Wait up to ``timeout`` s for a background compile in progress; True when none is running.
+
+    The navigation loop waits here *outside* its lock before a step, so a goal's first plan does not
+    hold the lock for the seconds a cold compile takes and status/cancel calls stay answered.
+    """
+    if not _started:
+        return True
+    return _finished.wait(timeout)
 
 
 _started: list[threading.Thread] = []
@@ -65,6 +77,8 @@ def compile_in_background() -> threading.Thread:
             _done.set()
         except Exception:  # noqa: BLE001 - a failed warm-up must not kill the provider; plans compile lazily
             logging.getLogger("nav2_wrapper").warning("background kernel compile failed", exc_info=True)
+        finally:
+            _finished.set()
 
     with _start_lock:
         if not _started:

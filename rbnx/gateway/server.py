@@ -36,6 +36,7 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
+from robonix_api import auth
 from robonix_api.mcp_server import AsgiServer
 from robonix_api.mcp_tools import MCP_PATH
 from robonix_api.proto_gen import atlas_pb2
@@ -46,6 +47,7 @@ POLL_S = 1.0
 FETCH_TIMEOUT_S = 20.0
 CALL_TIMEOUT_S = 120.0
 TERMINATED = atlas_pb2.STATE_TERMINATED
+READ_ONLY_TOOLS = auth.read_only_tool_names()
 
 _ENTRY = {"entry": {"type": "string", "description": "deploy entry name (see list_services)"}}
 LIFECYCLE_TOOLS: dict[str, tuple[str, dict[str, Any], list[str]]] = {
@@ -246,6 +248,9 @@ class Gateway:
     async def _call_tool(self, ctx: Any, params: types.CallToolRequestParams) -> types.CallToolResult:
         self._remember(ctx)
         name, args = params.name, dict(params.arguments or {})
+        refused = self._token_refusal(ctx, name)
+        if refused:
+            return _text_result(refused, error=True)
         if name in LIFECYCLE_TOOLS:
             return await anyio.to_thread.run_sync(self._lifecycle, name, args)
         tool = self._tools.get(name)
@@ -256,6 +261,21 @@ class Gateway:
         except Exception as exc:  # the provider went away mid-call, or answered garbage
             return _text_result(f"{name}: call to {tool.provider} at {tool.url} failed: {type(exc).__name__}: {exc}",
                                 error=True)
+
+    def _token_refusal(self, ctx: Any, name: str) -> str | None:
+        """With a deployment token, everything but reading (list_services, read-only provider tools) wants
+        the caller's ``Authorization: Bearer``; the gateway forwards with its own token, so it must not
+        be an open door to the providers' state-changing tools."""
+        if name == "list_services":
+            return None
+        tool = self._tools.get(name)
+        if tool is not None and tool.tool.name in READ_ONLY_TOOLS:
+            return None
+        if tool is None and name not in LIFECYCLE_TOOLS:
+            return None  # unknown: answered as such
+        request = getattr(ctx, "request", None)
+        bad = auth.refusal(auth.token_from_headers(getattr(request, "headers", None)), name)
+        return bad[1] if bad else None
 
     async def _forward(self, url: str, tool: str, args: dict[str, Any]) -> types.CallToolResult:
         """On the provider's kept-open session; a broken one is replaced once, else a one-off session."""
@@ -322,10 +342,8 @@ class _Link:
         self._closed = anyio.Event()
 
     async def run(self) -> None:
-        from mcp import Client
-
         try:
-            async with Client(self.url, read_timeout_seconds=CALL_TIMEOUT_S) as client:
+            async with auth.mcp_client(self.url, read_timeout_seconds=CALL_TIMEOUT_S) as client:
                 self.client = client
                 self._ready.set()
                 await self._closed.wait()
@@ -348,15 +366,11 @@ class _Link:
 
 async def fetch_tools(url: str) -> list[types.Tool]:
     """A provider's tools, through the official MCP client."""
-    from mcp import Client
-
-    async with Client(url, read_timeout_seconds=FETCH_TIMEOUT_S) as client:
+    async with auth.mcp_client(url, read_timeout_seconds=FETCH_TIMEOUT_S) as client:
         return list((await client.list_tools(cache_mode="refresh")).tools)
 
 
 async def forward(url: str, tool: str, args: dict[str, Any]) -> types.CallToolResult:
     """One tools/call on a provider, its result (errors included) passed through unchanged."""
-    from mcp import Client
-
-    async with Client(url, read_timeout_seconds=CALL_TIMEOUT_S) as client:
+    async with auth.mcp_client(url, read_timeout_seconds=CALL_TIMEOUT_S) as client:
         return await client.call_tool(tool, args)

@@ -104,7 +104,8 @@ def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> No
         names = _engine("ps", "--format", "{{.Names}} {{.Image}}", timeout=60).stdout
         assert "robonix-nav2-nav2-sim-navigation-" in names and image in names, names
         (state,) = (tmp_path / "state").glob("boot-*.json")
-        state, detail, _ = navigate(json.loads(state.read_text())["atlas"], 5.8, 3.0, timeout_s=150)
+        state, detail, _ = navigate(json.loads(state.read_text())["atlas"], 5.8, 3.0, timeout_s=150,
+                                   token=json.loads(state.read_text()).get("token", ""))
         assert state == "SUCCEEDED", detail
         proc.send_signal(signal.SIGINT)
         assert proc.wait(120) == 0, out.read_text()

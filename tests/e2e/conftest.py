@@ -7,9 +7,9 @@ import os
 import sys
 from pathlib import Path
 
-import grpc
 from support.procs import wait_until
 
+from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
@@ -73,8 +73,22 @@ def _grpc_endpoint(client: AtlasClient, contract: str) -> str:
         return ch.endpoint.removeprefix("grpc://")
 
 
-def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
-    """Navigate over gRPC like any robonix consumer; returns (final state, detail, ground-truth xy)."""
+def navigate(atlas: str, x: float, y: float, timeout_s: float, token: str = "") -> tuple[str, str, tuple[float, float]]:
+    """Navigate over gRPC like any robonix consumer; returns (final state, detail, ground-truth xy).
+    ``token``: the deployment's token (from its boot state file), sent on every call."""
+    before = os.environ.get("ROBONIX_DEPLOY_TOKEN")
+    if token:
+        os.environ["ROBONIX_DEPLOY_TOKEN"] = token
+    try:
+        return _navigate(atlas, x, y, timeout_s)
+    finally:
+        if before is None:
+            os.environ.pop("ROBONIX_DEPLOY_TOKEN", None)
+        else:
+            os.environ["ROBONIX_DEPLOY_TOKEN"] = before
+
+
+def _navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
     with AtlasClient(atlas) as client:
         nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
         status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
@@ -83,8 +97,7 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str
     req.goal.header.frame_id = "map"
     req.goal.pose.position.x, req.goal.pose.position.y = x, y
     req.goal.pose.orientation.w = 1.0
-    with grpc.insecure_channel(nav_ep) as nav_ch, grpc.insecure_channel(status_ep) as st_ch, \
-            grpc.insecure_channel(gt_ep) as gt_ch:
+    with auth.channel(nav_ep) as nav_ch, auth.channel(status_ep) as st_ch, auth.channel(gt_ep) as gt_ch:
         resp = stubs.RobonixServiceNavigationNavigateStub(nav_ch).Navigate(req, timeout=10)
         assert resp.accepted, resp.detail
         status = stubs.RobonixServiceNavigationNavigateStatusStub(st_ch)

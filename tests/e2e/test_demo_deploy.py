@@ -49,11 +49,13 @@ def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: P
         pids = recorded_pids(state_file)
         assert {name for name, _, _ in pids} >= {"rbnx boot", "atlas", *ENTRIES}
         atlas = json.loads(state_file.read_text())["atlas"]
+        token = json.loads(state_file.read_text()).get("token", "")
+        assert token, "rbnx boot records the deployment token"
         with AtlasClient(atlas) as client:
             states = {p.id: p.state for p in client.query() if p.id in ENTRIES}
         assert states == dict.fromkeys(ENTRIES, LifecycleState.ACTIVE), states
 
-        state, detail, (gx, gy) = navigate(atlas, *KITCHEN_GOAL, timeout_s=90)
+        state, detail, (gx, gy) = navigate(atlas, *KITCHEN_GOAL, timeout_s=90, token=token)
         assert state == "SUCCEEDED", detail
         assert math.hypot(gx - KITCHEN_GOAL[0], gy - KITCHEN_GOAL[1]) < 0.5, (gx, gy, detail)
 

@@ -8,6 +8,7 @@ Before deployments were keyed, both shared the state file of the deploy path and
 
 from __future__ import annotations
 
+import json
 import signal
 import socket
 import subprocess
@@ -92,7 +93,8 @@ def test_shutdown_of_one_deployment_leaves_the_other_running(tmp_path: Path) -> 
         assert b.state_file.is_file()
         assert "exited on its own" not in b.out.read_text(), b.out.read_text()
 
-        state, detail, _ = navigate(b.env["RBNX_ATLAS_LISTEN"], *KITCHEN_GOAL, timeout_s=120)
+        state, detail, _ = navigate(b.env["RBNX_ATLAS_LISTEN"], *KITCHEN_GOAL, timeout_s=120,
+                                    token=json.loads(b.state_file.read_text()).get("token", ""))
         assert state == "SUCCEEDED", detail
         assert all(alive(p[1], p[2]) for p in pids_b)
 

@@ -28,7 +28,6 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
-import grpc
 import pytest
 import yaml
 from mcp import Client
@@ -41,6 +40,8 @@ from support.boot import RbnxBoot, rbnx_cmd
 from support.procs import REPO, wait_until
 
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.auth import channel as token_channel
+from robonix_api.auth import mcp_client
 from robonix_api.dds import DdsNode, MapLifecycle
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
@@ -129,6 +130,7 @@ class Deployment:
         self.url = m.group(1)
         self.state = boot.state()
         assert self.state["gateway"] == self.url
+        boot.adopt_token()  # the agent holds the deployment token (`rbnx token`), as the README says
 
 
 @pytest.fixture(scope="module")
@@ -239,7 +241,7 @@ async def slam_stats(c: Client) -> dict[str, Any]:
 def test_agent_runs_the_robot_through_the_gateway(deployment: Deployment) -> None:
     async def agent() -> dict[str, Any]:
         out: dict[str, Any] = {}
-        async with Client(deployment.url, read_timeout_seconds=120) as c:
+        async with mcp_client(deployment.url, read_timeout_seconds=120) as c:
             out["tools0"] = await tool_names(c)
             await poll(c, "mapping INACTIVE", lambda: _state_is(c, "mapping", "inactive"))
             out["booted"] = await services(c)
@@ -296,7 +298,7 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
         with atlas.connect_capability(consumer_id="otel_test", provider_id="nav2",
                                       contract_id=nav_cid + "/status", transport="grpc") as ch:
             status_ep = ch.endpoint
-    with grpc.insecure_channel(endpoint) as chan, grpc.insecure_channel(status_ep) as schan:
+    with token_channel(endpoint) as chan, token_channel(status_ep) as schan:
         req = nav_pb.Navigate_Request()
         req.goal.header.frame_id = "map"
         req.goal.pose.position.x, req.goal.pose.position.y = GOALS[0]
@@ -321,7 +323,7 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     agent_tracer = TracerProvider().get_tracer("agent")
 
     async def agent() -> tuple[str, dict[str, Any]]:
-        async with Client(deployment.url, read_timeout_seconds=120) as c:
+        async with mcp_client(deployment.url, read_timeout_seconds=120) as c:
             with agent_tracer.start_as_current_span("agent.task") as task:
                 st = await drive(c, *GOALS[1])
                 await call(c, "deactivate", {"entry": "mapping"})
@@ -396,7 +398,7 @@ def test_a_person_at_a_terminal(deployment: Deployment) -> None:
 @pytest.mark.timeout(600)
 def test_agent_shuts_the_deployment_down(deployment: Deployment) -> None:
     async def agent() -> Any:
-        async with Client(deployment.url, read_timeout_seconds=60) as c:
+        async with mcp_client(deployment.url, read_timeout_seconds=60) as c:
             return await call(c, "shutdown")
 
     out = asyncio.run(asyncio.wait_for(agent(), 120))

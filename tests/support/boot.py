@@ -34,6 +34,7 @@ class RbnxBoot:
             self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--log-dir", str(self.logs), *extra],
                                          env=env, cwd=tmp, stdout=fh, stderr=subprocess.STDOUT)
         self.pids: list[int] = []
+        self._token_before: str | None = os.environ.get("ROBONIX_DEPLOY_TOKEN")
 
     def __enter__(self) -> RbnxBoot:
         return self
@@ -43,6 +44,20 @@ class RbnxBoot:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait(30)
+        if self._token_before is None:  # the boot's token was this test's only while the boot ran
+            os.environ.pop("ROBONIX_DEPLOY_TOKEN", None)
+        else:
+            os.environ["ROBONIX_DEPLOY_TOKEN"] = self._token_before
+
+    @property
+    def token(self) -> str:
+        return str(self.state().get("token") or "")
+
+    def adopt_token(self) -> None:
+        """The test process acts as a client of this deployment: the SDK's clients send its token."""
+        token = self.token
+        if token:
+            os.environ["ROBONIX_DEPLOY_TOKEN"] = token
 
     def output(self) -> str:
         return self.out.read_text()
@@ -59,6 +74,7 @@ class RbnxBoot:
             return f"{entries}/{entries} entries ready" in text
 
         wait_until(ready, timeout_s, "boot summary", 0.2)
+        self.adopt_token()
 
     def state(self) -> dict[str, Any]:
         """The (single) boot state file; records the PIDs of rbnx, the atlas and every child."""

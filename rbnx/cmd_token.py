@@ -1,0 +1,40 @@
+"""`rbnx token`: print the running deployment's token, for agents and scripts that call it directly.
+
+    export ROBONIX_DEPLOY_TOKEN=$(rbnx token)          # our SDK's clients send it from then on
+    curl -H "Authorization: Bearer $(rbnx token)" …     # an MCP client: the gateway wants this header
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rbnx import deploytoken
+from rbnx.statefile import read_state
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    t = sub.add_parser("token", help="print the deployment token of a running boot (for agents)")
+    t.add_argument("-f", "--file", help="deploy file of the boot (default: the boot serving --atlas)")
+
+
+def cmd_token(args: argparse.Namespace) -> int:
+    token = ""
+    if args.file:
+        from rbnx.deployment import StateNotFound, locate_state
+
+        try:
+            token = deploytoken.token_of_state(read_state(locate_state(Path(args.file), args.atlas)))
+        except StateNotFound as exc:
+            print(f"rbnx token: {exc}", file=sys.stderr)
+            return 1
+    else:
+        token = deploytoken.token_for_atlas(args.atlas)
+    if not token:
+        where = args.file or f"atlas {args.atlas}"
+        print(f"rbnx token: no deployment token recorded for {where} (not booted by rbnx boot on this host, "
+              "or booted with system.atlas.auth: none)", file=sys.stderr)
+        return 1
+    print(token)
+    return 0
