@@ -26,6 +26,7 @@ from typing import Any
 
 import grpc
 
+from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
@@ -95,6 +96,7 @@ class SimBoot:
         self.out = tmp / "boot.out"
         self.seen: dict[int, str] = {}          # every PID ever recorded (name): for the orphan count
         self.own_atlas: subprocess.Popen | None = None
+        self.token = ""
         self._channels: dict[str, grpc.Channel] = {}
         with open(self.out, "w") as fh:
             self.proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), "--no-progress",
@@ -104,6 +106,10 @@ class SimBoot:
         try:
             wait_until(self._booted, boot_timeout_s, "the boot summary (3/3 entries ready)", 0.2)
             self.pids()
+            # The deployment token (rbnx boot draws one per boot): our clients send it from the environment.
+            self.token = str(self.state().get("token") or "")
+            if self.token:
+                os.environ[auth.TOKEN_ENV] = self.token
         except BaseException:
             self.close()
             raise
@@ -141,9 +147,11 @@ class SimBoot:
         return out
 
     def restart_atlas(self) -> None:
-        """Start an atlas at the same address (what a supervisor would do), in its own session."""
+        """Start an atlas at the same address and with the deployment's token (what a supervisor would do),
+        in its own session."""
         log = open(self.tmp / "logs" / "atlas-restarted.log", "a")
-        self.own_atlas = subprocess.Popen(atlas_cmd(self.listen), env=self.env, stdout=log, stderr=subprocess.STDOUT,
+        env = dict(self.env, **({auth.TOKEN_ENV: self.token} if self.token else {}))
+        self.own_atlas = subprocess.Popen(atlas_cmd(self.listen), env=env, stdout=log, stderr=subprocess.STDOUT,
                                           stdin=subprocess.DEVNULL, start_new_session=True)
         log.close()
         self.seen[self.own_atlas.pid] = "atlas (restarted)"
@@ -172,7 +180,7 @@ class SimBoot:
             old = self._channels.pop(contract, None)
             if old is not None:
                 old.close()
-            self._channels[contract] = grpc.insecure_channel(ep)
+            self._channels[contract] = auth.channel(ep)
         return self._channels[contract]
 
     def _call(self, contract: str, fn: Any) -> Any:
@@ -249,6 +257,8 @@ class SimBoot:
 
     def close(self) -> None:
         """Last resort (a failed test): SIGCONT + SIGKILL every recorded process, by PID."""
+        if self.token and os.environ.get(auth.TOKEN_ENV) == self.token:
+            os.environ.pop(auth.TOKEN_ENV, None)
         for ch in self._channels.values():
             ch.close()
         self._channels.clear()
