@@ -24,9 +24,11 @@ from rbnx.procs import ProcGroup, proc_start_ticks, spawn, tail
 from rbnx.progress import ProgressView, Row
 from rbnx.runner import EntryRunner, Timing
 from rbnx.statefile import remove_state, state_path, write_state
+from rbnx.supervise import Supervisor
 
 READY_RE = re.compile(r"atlas listening on (\S+:\d+)")
 ATLAS_READY_TIMEOUT_S = 30.0
+SUPERVISE_PERIOD_S = 0.1  # how soon after a process death the atlas hears of it (plus one RPC)
 LOG_LEVELS = {"trace", "debug", "info", "warn", "warning", "error", "off"}
 
 
@@ -83,22 +85,28 @@ def atlas_command(listen: str) -> list[str]:
     return [sys.executable, "-m", "atlas.server", "--listen", listen]
 
 
-def spawn_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None) -> ProcGroup:
-    """Start the atlas in its own group (refused when its address is taken); see ``wait_atlas``."""
+def spawn_atlas(listen: str, env: dict[str, str], log_path: Path, log: str | None, append: bool = False) -> ProcGroup:
+    """Start the atlas in its own group (refused when its address is taken); see ``wait_atlas``.
+
+    ``append``: a restart keeps the earlier runs' log (the ready line is then looked for after them)."""
     if port_in_use(listen):
         raise BootError(f"atlas: something already listens on {client_addr(listen)}; stop it or change "
                         "system.atlas.listen")
     env = dict(env)
     if log and log.lower() in LOG_LEVELS:
         env.setdefault("ROBONIX_ATLAS_LOG", log.lower())
-    return spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path)
+    offset = log_path.stat().st_size if append and log_path.exists() else 0
+    group = spawn("atlas", atlas_command(listen), Path.cwd(), env, log_path, append=append)
+    group.log_offset = offset
+    return group
 
 
-def wait_atlas(group: ProcGroup, log_path: Path) -> str:
-    """Wait for the atlas's ready line; returns the client address (BootError, atlas stopped, if none)."""
+def wait_atlas(group: ProcGroup, log_path: Path, after: int = 0) -> str:
+    """Wait for the atlas's ready line (past byte ``after`` of its log); returns the client address
+    (BootError, atlas stopped, if none)."""
     deadline = time.monotonic() + ATLAS_READY_TIMEOUT_S
     while time.monotonic() < deadline:
-        m = READY_RE.search(log_path.read_text(errors="replace")) if log_path.exists() else None
+        m = READY_RE.search(log_path.read_bytes()[after:].decode(errors="replace")) if log_path.exists() else None
         if m:
             return client_addr(m.group(1))
         if not group.running():
@@ -309,25 +317,30 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
                 keep = True
                 return code
             print(f"running; Ctrl-C or `rbnx shutdown -f {deploy.path}` to stop", flush=True)
-            reported: set[str] = set()
-            while not sig.stop.wait(0.5):
-                _report_exits(orch, atlas_group, reported)
+
+            def respawn_atlas() -> ProcGroup:
+                nonlocal atlas_group
+                group = spawn_atlas(atlas_addr, base_env, opts.log_dir / "atlas.log", deploy.atlas_log,
+                                    append=True)
+                atlas_group = group
+                wait_atlas(group, opts.log_dir / "atlas.log", after=group.log_offset)
+                state["atlas_proc"] = {"pid": group.pid, "pgid": group.pgid, "start_ticks": group.start_ticks,
+                                       "restarts": sup.atlas_tracker.restarts}
+                save()
+                return group
+
+            with Atlas(atlas_addr, timeout=2.0) as atlas:
+                sup = Supervisor(orch.runners, atlas, opts.boot_timeout, save, view=orch.view,
+                                 atlas_proc=atlas_group, atlas_policy=deploy.atlas_restart,
+                                 respawn_atlas=respawn_atlas)
+                while not sig.stop.wait(SUPERVISE_PERIOD_S):
+                    sup.poll()
         return code
     finally:
         if not keep:
             _teardown(orch, atlas_group, opts, sig, gateway)
             remove_state(spath)
         sig.restore()
-
-
-def _report_exits(orch: Orchestrator, atlas_group: ProcGroup, reported: set[str]) -> None:
-    """While waiting, say once when a supervised process exits on its own (its group is still cleaned up)."""
-    procs = [(r.name, r.proc, r.log_path) for r in orch.runners if r.proc is not None and r.ok]
-    for name, proc, log in [*procs, ("atlas", atlas_group, atlas_group.log_path)]:
-        if name not in reported and proc is not None and not proc.running():
-            reported.add(name)
-            print(f"rbnx boot: {name} exited on its own with code {proc.popen.returncode} (log {log})",
-                  file=sys.stderr, flush=True)
 
 
 def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals, on_ready: Any) -> Any:

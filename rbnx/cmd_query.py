@@ -11,6 +11,7 @@ from typing import Any
 from google.protobuf.json_format import MessageToDict
 
 from rbnx.atlas_rpc import KIND_NAMES, STATE_NAMES, TRANSPORT_NAMES, Atlas, AtlasError, params_text
+from rbnx.statefile import restarts_for_atlas
 from robonix_api.proto_gen import atlas_pb2
 
 
@@ -64,6 +65,7 @@ def _endpoint(atlas: Atlas, pid: str, cap: atlas_pb2.Capability) -> str:
 def cmd_caps(args: argparse.Namespace, atlas: Atlas) -> int:
     kind = {"primitive": 1, "service": 2, "skill": 3}.get(args.kind or "", 0)
     provs = sorted(atlas.query(kind=kind, id=args.id or ""), key=lambda p: p.id)
+    restarts = restarts_for_atlas(atlas.addr)
     if args.json:
         out = []
         for p in provs:
@@ -73,16 +75,20 @@ def cmd_caps(args: argparse.Namespace, atlas: Atlas) -> int:
                     cd["endpoint"] = _endpoint(atlas, p.id, c)
             else:
                 d.pop("capability_md", None)
+            d["restarts"] = restarts.get(p.id, 0)
             out.append(d)
         print(json.dumps(out, indent=2))
         return 0
     if not provs:
         print(f"no providers registered at {atlas.addr}")
         return 0
+    if restarts.get("atlas"):
+        print(f"(atlas restarted {restarts['atlas']} time(s) by rbnx boot)")
     for p in provs:
         state = STATE_NAMES.get(p.state, str(p.state))
         detail = f" ({p.state_detail})" if p.state_detail else ""
         print(f"{p.id}  [{KIND_NAMES.get(p.kind, p.kind)}]  {state}{detail}  ns={p.namespace}"
+              + (f"  restarts {restarts[p.id]}" if restarts.get(p.id) else "")
               + (f"  heartbeat {_age(p.last_heartbeat_ms)}" if args.verbose else ""))
         for c in sorted(p.capabilities, key=lambda c: (c.contract_id, c.transport)):
             line = f"    {c.contract_id:<44} {TRANSPORT_NAMES.get(c.transport, c.transport):<5}"

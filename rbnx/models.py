@@ -17,6 +17,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from rbnx.envexpand import apply_env_section, expand_tree
+from rbnx.supervise import RestartMode, RestartPolicy
 
 KINDS: tuple[str, ...] = ("primitive", "service", "skill")
 DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
@@ -105,7 +106,20 @@ class PackageManifest(BaseModel):
 # ---------------------------------------------------------------- deploy file
 
 
-class AtlasSystem(BaseModel):
+class RestartFields(BaseModel):
+    """Supervision of one process by `rbnx boot` (see rbnx/supervise.py): whether it is started again
+    after it exits on its own, how many times in a row at most, and the first backoff delay."""
+
+    restart: RestartMode = "never"
+    restart_max: int = Field(default=5, ge=0, le=1000)
+    restart_backoff_s: float = Field(default=0.5, gt=0, le=60)
+
+    def restart_policy(self) -> RestartPolicy:
+        return RestartPolicy(self.restart, self.restart_max, self.restart_backoff_s,
+                             max(10.0, self.restart_backoff_s))
+
+
+class AtlasSystem(RestartFields):
     model_config = ConfigDict(extra="allow")
     listen: str = DEFAULT_ATLAS_LISTEN
     log: str | None = None
@@ -140,7 +154,7 @@ class SystemSection(BaseModel):
     _atlas = field_validator("atlas", mode="before")(lambda v: {} if v is None else v)
 
 
-class DeployEntry(BaseModel):
+class DeployEntry(RestartFields):
     model_config = ConfigDict(extra="allow")
     name: str
     path: str | None = None
@@ -284,6 +298,7 @@ class ResolvedEntry:
     manifest: PackageManifest
     config: dict[str, Any]
     autostart: bool = True
+    restart: RestartPolicy = field(default_factory=RestartPolicy)
 
     @property
     def key(self) -> str:
@@ -301,6 +316,7 @@ class ResolvedDeploy:
     warnings: list[str] = field(default_factory=list)
     atlas_auth: str = "token"
     atlas_allowed_hosts: list[str] = field(default_factory=list)
+    atlas_restart: RestartPolicy = field(default_factory=RestartPolicy)
 
 
 def packages_dir(deploy_dir: Path, env: Mapping[str, str]) -> Path:
@@ -402,9 +418,10 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
             except ManifestProblems as mp:
                 problems += mp.lines
                 continue
-            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config), e.autostart))
+            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config), e.autostart,
+                                         e.restart_policy()))
     if problems:
         raise ManifestProblems(problems)
     atlas = model.system.atlas
     return ResolvedDeploy(path.resolve(), model.name, dict(env), atlas.listen, atlas.log, entries, warnings,
-                          atlas.auth, list(atlas.allowed_hosts))
+                          atlas.auth, list(atlas.allowed_hosts), atlas.restart_policy())

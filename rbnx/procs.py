@@ -6,16 +6,15 @@ package and nothing else; /proc is read directly (no psutil) to see what is stil
 
 from __future__ import annotations
 
-import ctypes
 import os
 import shutil
 import signal
 import subprocess
+import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 
 def _stat_fields(pid: int) -> list[str] | None:
@@ -92,6 +91,7 @@ class ProcGroup:
     log_path: Path | None
     start_ticks: int | None
     extra_pids: set[int]
+    log_offset: int = 0  # size of the log before this run (appended logs of restarted processes)
 
     @property
     def pid(self) -> int:
@@ -151,7 +151,6 @@ class ProcGroup:
         return "killed"
 
 
-_PR_SET_PDEATHSIG = 1
 _supervised = False
 
 
@@ -162,40 +161,38 @@ def set_supervised(on: bool) -> None:
     _supervised = on
 
 
-def _die_with_parent() -> None:  # runs in the child between fork and exec; survives exec
-    ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
-
-
 _SETPRIV = shutil.which("setpriv")
+# Where setpriv is missing: a tiny interpreter (no site import) sets the parent-death signal on itself and
+# execs the command; it is started by vfork+exec like any other child, so no fork() happens either.
+_PDEATHSIG_SHIM = ("import ctypes, os, sys; ctypes.CDLL(None).prctl(1, 15); "
+                   "os.execvp(sys.argv[1], sys.argv[1:])")
 
 
-def _supervised_command(command: list[str]) -> tuple[list[str], Any]:
-    """(command, preexec_fn) that makes the child get SIGTERM when rbnx dies.
+def _supervised_command(command: list[str]) -> list[str]:
+    """The command wrapped so that the child gets SIGTERM when rbnx dies.
 
-    Why not just ``preexec_fn``: any preexec_fn makes Python use fork() instead of vfork(), and fork()
-    runs gRPC's atfork handlers in the child, whose pollers then trip over the descriptors the child
-    closes before exec: under load the child aborts (SIGSEGV/SIGABRT, "epoll_wait error: Bad file
-    descriptor" in the entry's log) before it ever runs. rbnx holds gRPC channels while it spawns, so
-    the parent-death signal is set by util-linux ``setpriv`` after a vfork-exec instead; the Python hook
-    is only the fallback where setpriv is missing.
+    Why not ``preexec_fn``: any preexec_fn makes Python use fork() instead of vfork(), and fork() runs
+    gRPC's atfork handlers in the child (unless fork support is off), whose pollers then trip over the
+    descriptors the child closes before exec: under load the child aborts (SIGSEGV/SIGABRT, "epoll_wait
+    error: Bad file descriptor" in the entry's log) or hangs before it ever runs. rbnx holds gRPC channels
+    while it spawns, so the parent-death signal is set after a vfork-exec instead: by util-linux
+    ``setpriv``, else by a one-line Python shim that execs the command.
     """
     if _SETPRIV:
-        return [_SETPRIV, "--pdeathsig", "TERM", "--", *command], None
-    return command, _die_with_parent
+        return [_SETPRIV, "--pdeathsig", "TERM", "--", *command]
+    return [sys.executable, "-S", "-c", _PDEATHSIG_SHIM, *command]
 
 
 def spawn(name: str, command: list[str], cwd: Path, env: Mapping[str, str], log_path: Path | None,
           append: bool = False) -> ProcGroup:
     """Start `command` in a new session with stdout+stderr to `log_path` (or inherited when None)."""
-    preexec = None
     if _supervised:
-        command, preexec = _supervised_command(command)
+        command = _supervised_command(command)
     out = open(log_path, "ab" if append else "wb") if log_path else None  # noqa: SIM115
     try:
         popen = subprocess.Popen(
             command, cwd=str(cwd), env=dict(env), stdin=subprocess.DEVNULL,
             stdout=out, stderr=subprocess.STDOUT if out else None, start_new_session=True,
-            preexec_fn=preexec,  # noqa: PLW1509 (main thread only)
         )
     finally:
         if out:

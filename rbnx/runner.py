@@ -21,6 +21,7 @@ from rbnx.backoff import Backoff
 from rbnx.models import ResolvedEntry
 from rbnx.procs import ProcGroup, proc_start_ticks, run_hook, spawn, tail
 from rbnx.statefile import run_dir
+from rbnx.supervise import RestartTracker
 
 
 def numba_cache_dir(env: dict[str, str]) -> Path:
@@ -78,6 +79,17 @@ class EntryRunner:
     _retry_cmd: int = 0
     _atlas_addr: str = ""
     _stale_reg: str = ""
+    restart_tracker: RestartTracker = field(init=False)
+    #: the activation state to drive a restarted process back to (what the atlas showed at its death)
+    restart_target: str | None = None
+
+    def __post_init__(self) -> None:
+        self.restart_tracker = RestartTracker(self.entry.restart)
+
+    @property
+    def restarts(self) -> int:
+        """How often the supervisor started this entry again (0 = first run)."""
+        return self.restart_tracker.restarts
 
     @property
     def name(self) -> str:
@@ -85,7 +97,10 @@ class EntryRunner:
 
     @property
     def target(self) -> str:
-        """Skills and `autostart: false` entries stop at INACTIVE: someone else decides when they run."""
+        """Skills and `autostart: false` entries stop at INACTIVE: someone else decides when they run; a
+        restarted process goes back to the state it had when it died."""
+        if self.restart_target is not None:
+            return self.restart_target
         return "inactive" if self.entry.kind == "skill" or not self.entry.autostart else "active"
 
     @property
@@ -114,6 +129,8 @@ class EntryRunner:
             RBNX_RUN_DIR=str(run_dir(env.get("RBNX_DEPLOY_NAME", ""), atlas_addr, env)),
             PYTHONUNBUFFERED="1",
         )
+        if self.restarts:
+            env["RBNX_RESTARTS"] = str(self.restarts)  # "you are a restart": resume saved work
         # numba compiles the planner kernels once into the user's cache, not next to installed sources
         # (often read-only) where every boot would compile them again.
         env.setdefault("NUMBA_CACHE_DIR", str(numba_cache_dir(env)))
@@ -123,7 +140,7 @@ class EntryRunner:
             env["PATH"] = os.pathsep.join(p for p in (bindir, env.get("PATH", "")) if p)
         return env
 
-    def start(self, atlas_addr: str, atlas: Atlas | None = None) -> None:
+    def start(self, atlas_addr: str, atlas: Atlas | None = None, append_log: bool = False) -> None:
         """Spawn the package; a record already in the atlas under this name is stale and is not waited on."""
         if atlas is not None:
             try:
@@ -137,11 +154,23 @@ class EntryRunner:
         self._set("starting")
         try:
             self.proc = spawn(self.name, ["bash", "-c", self.entry.manifest.start], self.entry.root,
-                              self.child_env(atlas_addr), self.log_path)
+                              self.child_env(atlas_addr), self.log_path, append=append_log)
         except OSError as exc:
             self._fail(f"cannot start: {exc}")
             return
         self._phase = "registering"
+
+    def respawn(self, atlas: Atlas) -> None:
+        """Start the package again after it died (the supervisor counted the restart first): same config,
+        same target state; the atlas record of the dead process is stale and is not waited on."""
+        if self.proc is not None and self.proc.alive_pids():
+            self.proc.stop(2.0)
+        if self.driver is not None:
+            self.driver.close()
+            self.driver = None
+        self._future = None
+        self.failure, self.log_tail = "", []
+        self.start(self._atlas_addr, atlas, append_log=True)
 
     # ------------------------------------------------------------------ stepping
 
@@ -292,4 +321,4 @@ class EntryRunner:
                 "manifest": str(self.entry.manifest_path),
                 "pid": p.pid if p else None, "pgid": p.pgid if p else None,
                 "start_ticks": p.start_ticks if p else None, "extra_pids": [[x, proc_start_ticks(x)] for x in sorted(p.extra_pids)] if p else [],
-                "log": str(self.log_path), "ready_at": self.ready_at}
+                "log": str(self.log_path), "ready_at": self.ready_at, "restarts": self.restarts}

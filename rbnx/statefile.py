@@ -121,3 +121,23 @@ def remove_state(path: Path) -> None:
         path.unlink()
     except FileNotFoundError:
         pass
+
+
+def restarts_for_atlas(atlas_addr: str) -> dict[str, int]:
+    """Process restarts per entry name (and ``atlas``) of the running boot that serves ``atlas_addr``,
+    read from its state file; empty when no boot of this user serves that address."""
+    out: dict[str, int] = {}
+    try:
+        files = sorted(state_dir().glob("boot-*.json"))
+    except OSError:
+        return out
+    for f in files:
+        st = read_state(f)
+        if not st or st.get("atlas") != atlas_addr:
+            continue
+        for c in st.get("children") or []:
+            if c.get("restarts"):
+                out[str(c.get("name"))] = int(c["restarts"])
+        if (st.get("atlas_proc") or {}).get("restarts"):
+            out["atlas"] = int(st["atlas_proc"]["restarts"])
+    return out

@@ -88,6 +88,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         self._registered = False
         self._procs = ProcessGroups()
         self._stop = threading.Event()
+        self._hb_wake = threading.Event()  # set: heartbeat now (stop, or the atlas is back after a loss)
         self._stop_reason = ""
         self._signalled = 0  # set by the signal handler (which must take no lock), acted on by run()
         self._ready = threading.Event()
@@ -331,9 +332,64 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
         found = self.atlas.query(id=self.id)
         return bool(found) and found[0].state == LifecycleState.TERMINATED
 
+    def _watch_atlas(self) -> None:
+        """Watch the connection to the atlas on a channel of its own: when it comes back after it was lost
+        (an atlas restart), wake the heartbeat at once, so this provider re-registers within about a
+        second instead of at its next heartbeat (seconds to tens of seconds later)."""
+        addr = next((v for v in (getattr(self._atlas, a, None) for a in ("address", "_address", "target"))
+                     if isinstance(v, str) and v), "")
+        if not addr:
+            return  # not a client of a real atlas (a test double): nothing to watch
+        try:
+            addr = addr.removeprefix("grpc://")
+            ch = grpc.insecure_channel(addr, options=[("grpc.enable_http_proxy", 0),
+                                                      ("grpc.initial_reconnect_backoff_ms", 200),
+                                                      ("grpc.min_reconnect_backoff_ms", 200),
+                                                      ("grpc.max_reconnect_backoff_ms", 1000)])
+        except Exception as exc:  # noqa: BLE001 (best effort: heartbeats still find a restart)
+            log.debug("no atlas watch: %s", exc)
+            return
+        lost = threading.Event()
+
+        def on_change(state: grpc.ChannelConnectivity) -> None:
+            if state != grpc.ChannelConnectivity.READY:
+                lost.set()
+
+        ch.subscribe(on_change)
+        try:
+            while not self._stop.is_set():
+                if not lost.wait(1.0):
+                    continue
+                lost.clear()
+                while not self._stop.is_set():  # (re)connect; a gone atlas is retried every second
+                    ready = grpc.channel_ready_future(ch)
+                    try:
+                        ready.result(timeout=1.0)
+                        break
+                    except grpc.FutureTimeoutError:
+                        ready.cancel()  # unsubscribes it; a new one asks to connect again
+                self._hb_wake.set()
+        except Exception as exc:  # noqa: BLE001 (e.g. interpreter shutdown; heartbeats still work)
+            log.debug("atlas watch ended: %s", exc)
+        finally:
+            ch.unsubscribe(on_change)
+            # gRPC's connectivity poller thread ends on its next tick (0.2 s) once nothing is subscribed;
+            # closing the channel under it makes that thread die with "Channel closed!" on stderr.
+            threading.Event().wait(0.5)
+            ch.close()
+
     def _heartbeat_loop(self, period_s: float) -> None:
+        threading.Thread(target=self._watch_atlas, name=f"atlas-watch-{self.id}", daemon=True).start()
+        self._heartbeat_until_stopped(period_s)
+
+    def _heartbeat_until_stopped(self, period_s: float) -> None:
         failing = False
-        while not self._stop.wait(period_s):
+        while not self._stop.is_set():
+            # while the atlas is unreachable, try every half second: it is back (restarted) soon
+            self._hb_wake.wait(min(period_s, 0.5) if failing else period_s)
+            self._hb_wake.clear()
+            if self._stop.is_set():
+                return
             try:
                 self.atlas.heartbeat(self.id)
                 if failing:
@@ -534,6 +590,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                 reply = self.lifecycle.shutdown(self._stop_reason)
                 log.info("shutdown (%s): ok=%s %s", self._stop_reason or "requested", reply.ok, reply.error)
             self._stop.set()
+            self._hb_wake.set()
             if self._hb_thread is not None:
                 self._hb_thread.join(5.0)
             self._procs.kill_all(grace_s=5.0)

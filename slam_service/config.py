@@ -69,6 +69,7 @@ class ProviderConfig(_Model):
     slam: dict[str, Any] = Field(default_factory=dict)  # SlamConfig fields
     map_publish_period_s: Seconds = Field(1.0, gt=0)  # rate cap of /map
     tf_period_s: float = Field(0.05, gt=0, le=0.1)  # map->odom republish period (wall): >= 10 Hz
+    autosave_period_s: float = Field(2.0, ge=0, le=3600)  # crash copy of the session (0 = off)
     scan_queue: int = Field(4, ge=1, le=100)  # scans waiting for the worker; oldest dropped beyond
     robot_description: str = DEFAULT_ROBOT  # footprint for the map card
 

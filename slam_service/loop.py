@@ -82,7 +82,9 @@ class SlamLoop:
     def __init__(self, node: Any, bindings: dict[str, Binding], frames: Frames, engine: SlamEngine, map_pub: Any,
                  *, use_sim_time: bool, map_period_s: float, tf_period_s: float, queue_size: int,
                  map_id: str = "", on_map: Callable[[Any], None] | None = None,
-                 on_change: Callable[[], None] | None = None) -> None:
+                 on_change: Callable[[], None] | None = None,
+                 autosave: Callable[[Any], None] | None = None, autosave_period_s: float = 2.0,
+                 resume_map_to_odom: tuple[float, float, float] | None = None) -> None:
         self.frames, self.bindings = frames, bindings
         self.map_id = map_id  # the saved map this session runs on ("" = a new map)
         self._on_map = on_map  # after each /map publication, with the grid (telemetry)
@@ -105,6 +107,13 @@ class SlamLoop:
         self._mounts: dict[str, tuple[float, float, float]] = {}
         self._odom: tuple[float, tuple[float, float, float]] | None = None  # (stamp, pose) of the latest /odom
         self._m2o = engine.map_to_odom()
+        # resumed after a crash: map->odom at the autosave; the first scan re-anchors on today's odometry
+        self._resume_m2o = resume_map_to_odom
+        if resume_map_to_odom is not None:
+            self._m2o = np.asarray(resume_map_to_odom, dtype=float)
+            self._resumed = True
+        self._autosave, self._autosave_period = autosave, autosave_period_s
+        self._saved_version: tuple[int, int, int] | None = None
         self._last_stamp = 0.0  # latest scan stamp processed
         self._last_tf_wall = -math.inf
         self._map_dirty = self._has_map()
@@ -116,6 +125,8 @@ class SlamLoop:
         ]
         self._threads = [threading.Thread(target=self._work, name="slam-worker", daemon=True),
                          threading.Thread(target=self._publish_loop, name="slam-publisher", daemon=True)]
+        if autosave is not None and autosave_period_s > 0:
+            self._threads.append(threading.Thread(target=self._autosave_loop, name="slam-autosave", daemon=True))
         for th in self._threads:
             th.start()
 
@@ -198,8 +209,9 @@ class SlamLoop:
             if not self.integrating:  # paused while the scan was queued
                 return None
             if self._resumed:  # odometry is trusted across a pause: keep map->odom, skip the jump check
-                self.engine.set_initial_pose(compose(self.engine.map_to_odom(), odom))
-                self._resumed = False
+                m2o = self._resume_m2o if self._resume_m2o is not None else self.engine.map_to_odom()
+                self.engine.set_initial_pose(compose(m2o, odom))
+                self._resumed, self._resume_m2o = False, None
             upd = self.engine.process(scan, odom, t)
             self._m2o = upd.map_to_odom
             self._last_stamp = max(self._last_stamp, t)
@@ -247,6 +259,36 @@ class SlamLoop:
         if self._on_map is not None:
             self._on_map(grid)
 
+    # ---------------------------------------------------------------- crash autosave
+    def _version(self) -> tuple[int, int, int]:
+        """Changes when the session has new data: another engine, a node, or an edge (loop closure)."""
+        g = self.engine.graph
+        return (id(self.engine), g.n_nodes, len(g.edge_ij))
+
+    def autosave_now(self) -> bool:
+        """Write the session if it has new data since the last write; True when written."""
+        with self.lock:
+            if self.engine.mode != "mapping" or self.engine.graph.n_nodes == 0:
+                return False
+            version = self._version()
+            if version == self._saved_version:
+                return False
+            session = self.engine.session()  # a snapshot: written outside the lock
+        assert self._autosave is not None
+        self._autosave(session)
+        self._saved_version = version
+        self.counters["autosaves"] += 1
+        return True
+
+    def _autosave_loop(self) -> None:
+        while not self._stop.wait(self._autosave_period):
+            try:
+                self.autosave_now()
+            except Exception as exc:  # a full disk must not stop mapping
+                if self._stop.is_set():
+                    return
+                self._warn("autosave", f"autosave failed: {exc}")
+
     # ---------------------------------------------------------------- control (RPC / lifecycle threads)
     def set_integrating(self, on: bool) -> None:
         with self.lock:
@@ -263,7 +305,7 @@ class SlamLoop:
         with self.lock:
             self.engine = engine
             self.map_id = map_id
-            self._resumed = False  # the loaded engine has its own start pose
+            self._resumed, self._resume_m2o = False, None  # the loaded engine has its own start pose
             self._m2o = engine.map_to_odom()
             self._map_dirty = True
             self._map_clock = self._map_wall = -math.inf
@@ -283,7 +325,7 @@ class SlamLoop:
         """A pose estimate (map frame) applied at the next scan; it wins over the resume re-anchoring."""
         with self.lock:
             self.engine.set_initial_pose(pose)
-            self._resumed = False
+            self._resumed, self._resume_m2o = False, None
 
     def robot_pose(self) -> tuple[float, float, float]:
         """Live base pose in map: map->odom (last estimate) composed with the latest odom->base."""

@@ -142,3 +142,57 @@ def load_engine(store: MapStore, slam_cfg: SlamConfig, map_id: str, mode: str,
     engine = SlamEngine(slam_cfg, mode)  # type: ignore[arg-type]
     engine.load(grid=loaded.grid, session=loaded.session, mode=mode, initial_pose=initial_pose)  # type: ignore[arg-type]
     return engine
+
+
+# ---------------------------------------------------------------- crash autosave
+
+AUTOSAVE_DIR = ".autosave"
+
+
+class Autosave:
+    """The running session's crash copy: ``<map_dir>/.autosave/<instance>/session.npz``.
+
+    Written atomically (temp file + ``os.replace``), so a kill in the middle leaves the previous copy;
+    read back when ``rbnx boot`` restarts the service after a crash (``RBNX_RESTARTS`` > 0). Hidden from
+    ``list_maps`` (a dot folder) and never a saved map: ``save_map`` is still how a map is kept.
+    """
+
+    def __init__(self, map_dir: str | os.PathLike[str], instance: str) -> None:
+        self.folder = Path(map_dir).expanduser() / AUTOSAVE_DIR / check_id(instance)
+        self.path = self.folder / SESSION
+
+    def write(self, session: SessionData) -> Path:
+        from slam_service.core import save_session
+
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return save_session(session, self.path)
+
+    def read(self) -> SessionData | None:
+        """The last autosaved session, or None when there is none or it cannot be read (logged by caller)."""
+        if not self.path.is_file():
+            return None
+        return load_session(self.path)
+
+    def discard(self) -> None:
+        """A fresh start: an autosave of an earlier run must never be resumed by a later crash. An
+        unusable map_dir is not an error here (saving reports it; the autosave thread warns)."""
+        try:
+            self.path.unlink(missing_ok=True)
+        except OSError:
+            pass
+
+
+def resume_engine(session: SessionData, slam_cfg: SlamConfig) -> tuple[SlamEngine, tuple[float, float, float]]:
+    """A mapping engine continuing ``session``, and map->odom at its last node (pose ∘ odom⁻¹).
+
+    The odometry source kept running while SLAM was down, so the robot's map pose at the first scan after
+    the restart is this map->odom composed with the odometry then (the caller's loop does that)."""
+    from robonix_api.geometry import compose, inverse
+
+    engine = SlamEngine(slam_cfg, "mapping")
+    engine.load(session=session, mode="mapping")
+    if session.graph.n_nodes:
+        m2o = compose(session.graph.poses[-1], inverse(session.odom[-1]))
+    else:
+        m2o = engine.map_to_odom()
+    return engine, (float(m2o[0]), float(m2o[1]), float(m2o[2]))

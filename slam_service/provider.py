@@ -12,6 +12,7 @@ stops the loop and closes DDS. A failed or deferred INIT leaves the previous ses
 from __future__ import annotations
 
 import logging
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,11 +21,19 @@ from robonix_api.dds import MapLifecycle, OccupancyGrid
 from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
-from slam_service.core import SlamConfig, SlamEngine
+from slam_service.core import SessionFileError, SlamConfig, SlamEngine
 from slam_service.core.numeric import load_in_background
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
-from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.maps import (
+    Autosave,
+    MapIdError,
+    MapStore,
+    MapStoreError,
+    check_id,
+    load_engine,
+    resume_engine,
+)
 from slam_service.telemetry import PAUSED, SHUTDOWN, LifecycleAnnouncer, MapSpans
 
 log = logging.getLogger("slam_service")
@@ -51,6 +60,8 @@ class SlamSetup:
     footprint: list[tuple[float, float]]
     bindings: dict[str, Binding]
     engine: SlamEngine  # the engine the session starts with; the loop owns it (load_map swaps it there)
+    autosave: Autosave | None = None  # the crash copy of a mapping session
+    resume_map_to_odom: tuple[float, float, float] | None = None  # set when resumed from the crash copy
 
 
 def resolve_inputs(atlas: Any, consumer: str, cfg: ProviderConfig) -> dict[str, Binding]:
@@ -95,9 +106,32 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
                 engine = load_engine(store, slam_cfg, cfg.map_id, cfg.mode, pose)
             except (MapStoreError, ValueError) as exc:
                 return Err(f"map_id: {exc}")
-        else:
-            engine = SlamEngine(slam_cfg, cfg.mode)
-        return SlamSetup(cfg, slam_cfg, store, footprint, bindings, engine)
+            return SlamSetup(cfg, slam_cfg, store, footprint, bindings, engine)
+        autosave, m2o = self._autosave_for(cfg), None
+        engine = SlamEngine(slam_cfg, cfg.mode)
+        if autosave is not None and restarts() > 0:
+            try:
+                session = autosave.read()
+            except (SessionFileError, OSError, ValueError) as exc:
+                log.warning("autosave %s unreadable, starting a new map: %s", autosave.path, exc)
+                session = None
+            if session is not None:
+                engine, m2o = resume_engine(session, slam_cfg)
+                log.info("restart %d: resumed the autosaved session %s (%d nodes)", restarts(), autosave.path,
+                         session.graph.n_nodes)
+        elif autosave is not None:
+            autosave.discard()
+        return SlamSetup(cfg, slam_cfg, store, footprint, bindings, engine, autosave, m2o)
+
+    def _autosave_for(self, cfg: ProviderConfig) -> Autosave | None:
+        """A new mapping session gets a crash copy (a session on a saved map_id restarts from that map)."""
+        if cfg.mode != "mapping" or cfg.autosave_period_s <= 0:
+            return None
+        try:
+            return Autosave(cfg.map_dir, self.svc.id)
+        except MapIdError:
+            log.warning("no autosave: instance id %r is not a plain file name", self.svc.id)
+            return None
 
     def start(self, setup: SlamSetup) -> SlamLoop:
         cfg, bindings = setup.cfg, setup.bindings
@@ -113,7 +147,9 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
                         use_sim_time=cfg.use_sim_time, map_period_s=cfg.map_publish_period_s,
                         tf_period_s=cfg.tf_period_s, queue_size=cfg.scan_queue, map_id=cfg.map_id or "",
                         on_map=spans.on_map if spans is not None else None,
-                        on_change=lambda: self._announce(holder[0]) if holder else None)
+                        on_change=lambda: self._announce(holder[0]) if holder else None,
+                        autosave=setup.autosave.write if setup.autosave is not None else None,
+                        autosave_period_s=cfg.autosave_period_s, resume_map_to_odom=setup.resume_map_to_odom)
         holder.append(loop)
         self._announce(loop)
         scan, odom = bindings["scan"], bindings["odom"]
@@ -140,6 +176,14 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         if s is not None:
             self._announce(s.work, SHUTDOWN)
         return super()._on_shutdown()
+
+
+def restarts() -> int:
+    """How often ``rbnx boot`` restarted this process (``RBNX_RESTARTS``; 0 on a first start)."""
+    try:
+        return max(0, int(os.environ.get("RBNX_RESTARTS", "0") or 0))
+    except ValueError:
+        return 0
 
 
 def _pose_if_known(work: SlamLoop) -> tuple[float, float, float] | None:

@@ -146,6 +146,26 @@ class SimBoot:
             self.seen[pid] = name
         return out
 
+    def atlas_listening(self) -> bool:
+        host, _, port = self.listen.rpartition(":")
+        try:
+            with socket.create_connection((host, int(port)), timeout=0.5):
+                return True
+        except OSError:
+            return False
+
+    def ensure_atlas(self, wait_s: float = 5.0) -> str:
+        """After the atlas was killed: give the boot ``wait_s`` to start it again (``restart:
+        on-failure``), else start one ourselves. Returns who did: "rbnx boot" or "fault suite"."""
+        deadline = time.monotonic() + wait_s
+        while time.monotonic() < deadline:
+            if self.atlas_listening():
+                self.pids()
+                return "rbnx boot"
+            time.sleep(0.1)
+        self.restart_atlas()
+        return "fault suite"
+
     def restart_atlas(self) -> None:
         """Start an atlas at the same address and with the deployment's token (what a supervisor would do),
         in its own session."""
