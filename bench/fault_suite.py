@@ -35,7 +35,7 @@ sys.path.insert(0, str(REPO / "tests"))
 RESULTS = REPO / "bench" / "results" / "fault_suite.json"
 
 from support.faults import KITCHEN, TERMINAL, Recorder, SimBoot, signal_pid  # noqa: E402
-from support.procs import alive, wait_until  # noqa: E402
+from support.procs import wait_until  # noqa: E402
 
 TARGETS = ("panda_mobile", "mapping", "nav2", "atlas")
 KINDS = ("kill", "stop")
