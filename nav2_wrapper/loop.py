@@ -38,6 +38,7 @@ from robonix_api.geometry import compose
 from .config import ProviderConfig
 from .goals import PlanarGoal
 from .inputs import Inputs, RobotState
+from .journal import GoalJournal, JournaledGoal
 from .speed import SpeedLimits
 from .tracing import GoalSpans
 from .upstream import Binding, UpstreamWatch
@@ -56,12 +57,14 @@ class Publishers:
 
 class NavLoop:
     def __init__(self, nav: Navigator, inputs: Inputs, pubs: Publishers, cfg: ProviderConfig, speed: SpeedLimits,
-                 upstream: UpstreamWatch | None = None) -> None:
+                 upstream: UpstreamWatch | None = None, journal: GoalJournal | None = None) -> None:
         self.nav, self.inputs, self.pubs, self.cfg, self.speed = nav, inputs, pubs, cfg, speed
         self.period = 1.0 / nav.cfg.navigator.controller_frequency
         self.lock = threading.RLock()
         self.accepting = False
         self._upstream = upstream
+        self.journal = journal or GoalJournal(None)
+        self._journaled = ""          # run id written to the journal ("" when none)
         self.grace = InputGrace(nav.cfg.navigator.input_grace_s)
         self._degraded = ""           # why an optional input is lost ("" when all are there)
         self._stop = threading.Event()
@@ -107,6 +110,33 @@ class NavLoop:
             self.accepting = on
             if not on:
                 self._end_active(reason or "canceled: navigation deactivated", canceled=True)
+            else:
+                self._resume_journaled()
+
+    def _resume_journaled(self) -> None:
+        """A previous process of ours died driving a goal: take it up again under its run id. Lock held."""
+        g = self.journal.pending()
+        if g is None or (self.nav.active is not None and self.nav.active.state not in TERMINAL):
+            return
+        rec = self.nav.navigate(g.x, g.y, g.yaw, self.inputs.clock.now(), run_id=g.run_id)
+        if rec.accepted:
+            self._journaled = g.run_id
+            log.warning("resumed run %s from the goal journal (the previous process died driving it)", g.run_id)
+        else:
+            self.journal.clear()
+            log.warning("goal journal's run %s not resumed: %s", g.run_id, rec.detail)
+
+    def _sync_journal(self) -> None:
+        """Keep the journal equal to the live run (cleared once it ended in any way). Lock held."""
+        a = self.nav.active
+        live = a.run_id if a is not None and a.state not in TERMINAL else ""
+        if live == self._journaled:
+            return
+        if live:
+            self.journal.record(JournaledGoal(live, *a.goal))
+        else:
+            self.journal.clear()
+        self._journaled = live
 
     def stop(self, reason: str = "canceled: navigation shutting down") -> None:
         with self.lock:
@@ -150,6 +180,7 @@ class NavLoop:
             prev = self.nav.active
             live = prev is not None and prev.state not in TERMINAL
             rec = self.nav.navigate(*xyz, now, run_id=rid)
+            self._sync_journal()
             if rec.accepted and self._spans is not None:
                 self._spans.start(rec, trace_parent, self._state.pose if self._state is not None else None)
                 self._spans.sweep(None)  # a preempted run ends its span now
@@ -167,6 +198,7 @@ class NavLoop:
             was_live = rec.state not in TERMINAL
             if was_live:
                 self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+                self._sync_journal()
                 self.publish_zero()
                 self.speed.run_ended(rec.run_id)
                 if self._spans is not None:
@@ -222,6 +254,7 @@ class NavLoop:
         if rec is None or rec.state in TERMINAL:
             return
         self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+        self._sync_journal()
         if not canceled:
             rec.state = FAILED
         rec.detail = reason
@@ -414,6 +447,7 @@ class NavLoop:
                 if rec.state in TERMINAL:
                     self.speed.run_ended(rec.run_id)
             self._publish_plan(now)
+            self._sync_journal()
 
     def _publish_cmd(self, rec: GoalRecord, vx: float, vy: float, wz: float) -> None:
         if rec.state in (PENDING, RUNNING) or self._moving:

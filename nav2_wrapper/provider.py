@@ -28,6 +28,7 @@ from robonix_api.hosting import INIT_FAILED, SessionHost, serve_contracts
 from .config import ConfigError, ProviderConfig, parse_config
 from .handlers import NavHandlers
 from .inputs import Inputs
+from .journal import GoalJournal
 from .loop import NavLoop, Publishers
 from .speed import SpeedLimits
 from .upstream import Binding, MissingUpstream, UpstreamWatch, resolve
@@ -98,7 +99,8 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         speed = SpeedLimits(cfg.dynamic_speed, params.config.controller.max_vel_x)
 
         watch = UpstreamWatch(self.svc.atlas, self.svc.id, bindings)
-        loop = NavLoop(Navigator(params.config), inputs, pubs, cfg, speed, watch)
+        loop = NavLoop(Navigator(params.config), inputs, pubs, cfg, speed, watch,
+                       GoalJournal.from_env(self.svc.id))
         deadline = time.monotonic() + cfg.action_wait_s
         while True:
             missing = inputs.missing()
