@@ -2,6 +2,11 @@
 
 Callbacks only store the newest sample (with a sequence number, so the loop feeds the costmaps each
 new map or scan once) and the clock time it arrived; every decision is made by the loop thread.
+
+Each input also knows whether its source is alive: DDS liveliness of the writers (a killed or stopped
+provider is noticed within the writers' lease, 0.5 s by default), the atlas' TERMINATED notice (set by
+the upstream watch), and staleness. ``lost()`` turns that into {source: why} for the loop's pause/grace
+logic; ``rebind()`` follows a restarted provider to new topics without restarting navigation.
 """
 
 from __future__ import annotations
@@ -48,12 +53,54 @@ class Inputs:
         self.scan: LaserScan | None = None
         self.scan_seq = 0
         self._warned_frame = False
-        self._subs = [node.create_subscription(bindings["map"].topic, OccupancyGrid, self._on_map, bindings["map"].qos),
-                      node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom,
-                                               bindings["odom"].qos)]
-        if "scan" in bindings:
-            self._subs.append(node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan,
-                                                       bindings["scan"].qos))
+        self.node = node
+        self._had_writer: dict[str, bool] = {}
+        self._terminated: dict[str, str] = {}   # role -> why (the atlas' TERMINATED notice)
+        self._subs: dict[str, Any] = {}
+        for role in ("map", "odom", "scan"):
+            if role in bindings:
+                self._subscribe(role, bindings[role])
+
+    _TYPES: dict[str, type] = {"map": OccupancyGrid, "odom": Odometry, "scan": LaserScan}
+
+    def _subscribe(self, role: str, b: Binding) -> None:
+        cb = {"map": self._on_map, "odom": self._on_odom, "scan": self._on_scan}[role]
+        self._had_writer[role] = False
+        self._subs[role] = self.node.create_subscription(
+            b.topic, self._TYPES[role], cb, b.qos, on_liveliness=lambda h, alive: self._on_live(role, alive))
+
+    def rebind(self, role: str, b: Binding) -> None:
+        """Follow a (restarted) provider to a new topic/QoS for ``role``: new reader, old one closed."""
+        old = self._subs.pop(role, None)
+        self.bindings[role] = b
+        self._subscribe(role, b)
+        if old is not None:
+            old.close()
+        log.info("%s rebound to %s (qos %s, provider %s)", role, b.topic, b.qos, b.provider_id or "-")
+
+    def set_terminated(self, role: str, why: str) -> None:
+        """The atlas says the provider of ``role`` is TERMINATED ("" clears it)."""
+        with self._lock:
+            if why:
+                self._terminated[role] = why
+            else:
+                self._terminated.pop(role, None)
+
+    def _on_live(self, role: str, alive: bool) -> None:
+        if alive:
+            self._had_writer[role] = True
+
+    def writer_lost(self, role: str) -> bool:
+        """True when ``role``'s topic had a live writer and now has none (killed, stopped or gone)."""
+        sub = self._subs.get(role)
+        return sub is not None and self._had_writer.get(role, False) and not sub.alive_writers()
+
+    def source_name(self, role: str) -> str:
+        """How a lost input is named to people: the provider id when the atlas gave it, else the topic."""
+        b = self.bindings.get(role)
+        if b is None:
+            return role
+        return b.provider_id or b.topic
 
     # ---- callbacks (DDS dispatch thread) -----------------------------------------------------------
     def _on_map(self, msg: OccupancyGrid) -> None:
@@ -151,9 +198,64 @@ class Inputs:
                 out.append(f"no TF {a}→{b}")
         return out
 
+    def lost(self, now: float, state: RobotState | None, data_timeout_s: float,
+             map_tf_timeout_s: float, stale_checks: bool = True,
+             liveliness_checks: bool = True) -> tuple[dict[str, str], dict[str, str]]:
+        """({source: why} of lost *required* inputs (map→odom, odom), the same for optional ones (scan)).
+
+        Lost means: its DDS writer lost liveliness, the atlas reports its provider TERMINATED, or its
+        data is older than the timeout (unless ``stale_checks`` is off: right after this process itself
+        was frozen, everything looks old until the queued samples are read; ``liveliness_checks`` the same
+        for writers' leases, which ran out in our frozen process). A source is named by provider id
+        (e.g. ``mapping``).
+        """
+        f = self.frames
+        req: dict[str, list[str]] = {}
+        opt: dict[str, list[str]] = {}
+        with self._lock:
+            term = dict(self._terminated)
+        # map→odom (the map provider's TF) -----------------------------------------------------------
+        why = []
+        if "map" in term:
+            why.append(term["map"])
+        if liveliness_checks and self.tf.link_lost(f.odom):
+            why.append(f"TF {f.map}→{f.odom} stopped (DDS liveliness lost)")
+        elif stale_checks and state is not None and state.map_tf_age > map_tf_timeout_s:
+            why.append(f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old)")
+        if why:
+            req.setdefault(self.source_name("map"), []).extend(why)
+        # odom (the chassis: /odom and TF odom→base) -------------------------------------------------
+        why = []
+        if "odom" in term:
+            why.append(term["odom"])
+        odom_topic = self.bindings["odom"].topic
+        if liveliness_checks and self.writer_lost("odom"):
+            why.append(f"{odom_topic} stopped (DDS liveliness lost)")
+        elif liveliness_checks and self.tf.link_lost(f.base):
+            why.append(f"TF {f.odom}→{f.base} stopped (DDS liveliness lost)")
+        elif stale_checks:
+            age = self.odom_age(now)
+            if age > data_timeout_s:
+                why.append(f"no odometry on {odom_topic} for {age:.1f} s" if math.isfinite(age)
+                           else f"no odometry on {odom_topic}")
+            elif state is not None and state.tf_age > data_timeout_s:
+                why.append(f"TF {f.odom}→{f.base} is stale ({state.tf_age:.1f} s old)")
+        if why:
+            req.setdefault(self.source_name("odom"), []).extend(why)
+        # scan (optional: the obstacle layer) --------------------------------------------------------
+        if "scan" in self.bindings:
+            why = []
+            if "scan" in term:
+                why.append(term["scan"])
+            if liveliness_checks and self.writer_lost("scan"):
+                why.append(f"{self.bindings['scan'].topic} stopped (DDS liveliness lost)")
+            if why:
+                opt.setdefault(self.source_name("scan"), []).extend(why)
+        return ({k: "; ".join(v) for k, v in req.items()}, {k: "; ".join(v) for k, v in opt.items()})
+
     def close(self) -> None:
-        for s in self._subs:
+        for s in self._subs.values():
             s.close()
-        self._subs = []
+        self._subs = {}
         self.tf.close()
         self.clock.close()

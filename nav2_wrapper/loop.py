@@ -3,8 +3,13 @@
 One lock guards the navigator: gRPC/MCP handlers call ``navigate``/``cancel``/``status`` while the loop
 ticks at the controller frequency on the provider's clock (sim time with ``use_sim_time``, so a
 faster-than-real-time simulator gets the same control rate in sim seconds). The loop never hangs a
-run: stale odometry or TF, a stalled /clock or an upstream leaving the atlas stop the robot and fail
-the run with the reason.
+run, and never throws one away that could go on: when a required input (map→odom, odometry) is lost
+(DDS liveliness, the atlas' TERMINATED notice, stale data) the robot is stopped at once and the run
+paused (RUNNING, "waiting for mapping ..."); it continues when the input returns within
+``input_grace_s`` and fails with the reason after that (``core/grace.py``). A lost optional input (the
+lidar) only degrades the run. A provider missing from the atlas is not lost by itself: after an atlas
+restart providers re-register, and the data plane decides. A stalled /clock stops the robot and fails
+the run after ``clock_timeout_s``.
 """
 
 from __future__ import annotations
@@ -14,28 +19,34 @@ import math
 import threading
 import time
 import uuid
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from nav2_wrapper.core import GoalRecord, Navigator
+from nav2_wrapper.core.grace import FAILED as GRACE_FAILED
+from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
+from nav2_wrapper.core.grace import InputGrace
 from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
 from nav2_wrapper.core.warmup import ready as kernels_ready
 from nav2_wrapper.core.warmup import wait_finished as kernels_wait
-from robonix_api.dds import FrameNotFoundError, Path, TfError
+from robonix_api.dds import FrameNotFoundError, Path, TfError, Twist
 from robonix_api.dds.convert import header, pose_stamped, twist
 from robonix_api.geometry import compose
 
 from .config import ProviderConfig
 from .goals import PlanarGoal
 from .inputs import Inputs, RobotState
+from .journal import GoalJournal, JournaledGoal
 from .speed import SpeedLimits
 from .tracing import GoalSpans
+from .upstream import Binding, UpstreamWatch
 
 log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
+SELF_FREEZE_S = 1.0  # wall s after this process was frozen during which writers' liveliness losses are not trusted
+WATCH_PERIOD_S = 1.0  # wall s between looks at the atlas (TERMINATED notices, re-registrations)
 
 
 @dataclass
@@ -46,13 +57,16 @@ class Publishers:
 
 class NavLoop:
     def __init__(self, nav: Navigator, inputs: Inputs, pubs: Publishers, cfg: ProviderConfig, speed: SpeedLimits,
-                 upstream_ok: Callable[[], str] | None = None) -> None:
+                 upstream: UpstreamWatch | None = None, journal: GoalJournal | None = None) -> None:
         self.nav, self.inputs, self.pubs, self.cfg, self.speed = nav, inputs, pubs, cfg, speed
         self.period = 1.0 / nav.cfg.navigator.controller_frequency
         self.lock = threading.RLock()
         self.accepting = False
-        self._upstream_ok = upstream_ok
-        self._upstream_lost = ""
+        self._upstream = upstream
+        self.journal = journal or GoalJournal(None)
+        self._journaled = ""          # run id written to the journal ("" when none)
+        self.grace = InputGrace(nav.cfg.navigator.input_grace_s)
+        self._degraded = ""           # why an optional input is lost ("" when all are there)
         self._stop = threading.Event()
         self._grid_seq = self._scan_seq = 0
         self._plan_sent: Any = None
@@ -62,6 +76,9 @@ class NavLoop:
         self._clock_last = -math.inf
         self._clock_wall = time.monotonic()
         self._paused = False
+        self._paused_zero_sent = False
+        self._last_step_wall = time.monotonic()
+        self._thawed_at = -math.inf
         self._spans = GoalSpans.maybe(cfg.frames.map)  # None unless tracing is on
         self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
         self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
@@ -84,7 +101,7 @@ class NavLoop:
 
     def start(self) -> None:
         self._thread.start()
-        if self._upstream_ok is not None:
+        if self._upstream is not None:
             self._watch.start()
 
     def set_accepting(self, on: bool, reason: str = "") -> None:
@@ -93,6 +110,33 @@ class NavLoop:
             self.accepting = on
             if not on:
                 self._end_active(reason or "canceled: navigation deactivated", canceled=True)
+            else:
+                self._resume_journaled()
+
+    def _resume_journaled(self) -> None:
+        """A previous process of ours died driving a goal: take it up again under its run id. Lock held."""
+        g = self.journal.pending()
+        if g is None or (self.nav.active is not None and self.nav.active.state not in TERMINAL):
+            return
+        rec = self.nav.navigate(g.x, g.y, g.yaw, self.inputs.clock.now(), run_id=g.run_id)
+        if rec.accepted:
+            self._journaled = g.run_id
+            log.warning("resumed run %s from the goal journal (the previous process died driving it)", g.run_id)
+        else:
+            self.journal.clear()
+            log.warning("goal journal's run %s not resumed: %s", g.run_id, rec.detail)
+
+    def _sync_journal(self) -> None:
+        """Keep the journal equal to the live run (cleared once it ended in any way). Lock held."""
+        a = self.nav.active
+        live = a.run_id if a is not None and a.state not in TERMINAL else ""
+        if live == self._journaled:
+            return
+        if live:
+            self.journal.record(JournaledGoal(live, *a.goal))
+        else:
+            self.journal.clear()
+        self._journaled = live
 
     def stop(self, reason: str = "canceled: navigation shutting down") -> None:
         with self.lock:
@@ -130,14 +174,13 @@ class NavLoop:
             now = self.inputs.clock.now()
             if isinstance(goal, str):
                 return self._reject(rid, (math.nan, math.nan, math.nan), goal, now), ""
-            if self._upstream_lost:
-                return self._reject(rid, (goal.x, goal.y, goal.yaw), self._upstream_lost, now), ""
             xyz = self._to_map(goal)
             if isinstance(xyz, str):
                 return self._reject(rid, (goal.x, goal.y, goal.yaw), xyz, now), ""
             prev = self.nav.active
             live = prev is not None and prev.state not in TERMINAL
             rec = self.nav.navigate(*xyz, now, run_id=rid)
+            self._sync_journal()
             if rec.accepted and self._spans is not None:
                 self._spans.start(rec, trace_parent, self._state.pose if self._state is not None else None)
                 self._spans.sweep(None)  # a preempted run ends its span now
@@ -155,6 +198,7 @@ class NavLoop:
             was_live = rec.state not in TERMINAL
             if was_live:
                 self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+                self._sync_journal()
                 self.publish_zero()
                 self.speed.run_ended(rec.run_id)
                 if self._spans is not None:
@@ -210,6 +254,7 @@ class NavLoop:
         if rec is None or rec.state in TERMINAL:
             return
         self.nav.cancel(self.inputs.clock.now(), rec.run_id)
+        self._sync_journal()
         if not canceled:
             rec.state = FAILED
         rec.detail = reason
@@ -258,11 +303,9 @@ class NavLoop:
                 self._stop.wait(0.05)
 
     def _watch_clock(self, now: float) -> None:
-        """Checks that must run even when sim time stands still: an upstream that left the atlas fails the
-        run; a /clock not advancing stops the robot at once and fails the run after clock_timeout_s (wall)."""
-        if self._upstream_lost:
-            with self.lock:
-                self._end_active(self._upstream_lost, canceled=False)
+        """Checks that must run even when sim time stands still: a /clock not advancing stops the robot at
+        once and fails the run after clock_timeout_s (wall), or after input_grace_s (wall) when a required
+        input is lost with it (the simulator itself died or stalled: the run waits for it by name)."""
         if not self.inputs.clock.use_sim_time:
             return
         wall = time.monotonic()
@@ -275,38 +318,100 @@ class NavLoop:
             rec = self.nav.active
             if rec is None or rec.state in TERMINAL:
                 return
-            if stalled > self.cfg.clock_timeout_s:
-                self._end_active(f"/clock stalled for {stalled:.0f} s (simulator stopped?)", canceled=False)
-            elif stalled > self.cfg.clock_stall_s and not self._paused:
+            if stalled <= self.cfg.clock_stall_s:
+                return
+            if not self._paused:
                 self._paused = True
                 self.publish_zero()
+            lost, _ = self._inputs_lost(now, self._state)
+            if lost:
+                verdict = self.grace.update(now, wall, lost, clock_stalled=True)
+                if verdict.state == GRACE_FAILED:
+                    self._end_active(f"{verdict.detail}; /clock stalled for {stalled:.0f} s", canceled=False)
+                else:
+                    rec.detail = f"{verdict.detail}; /clock stalled for {stalled:.1f} s"
+            elif stalled > self.cfg.clock_timeout_s:
+                self._end_active(f"/clock stalled for {stalled:.0f} s (simulator stopped?)", canceled=False)
+            else:
                 rec.detail = f"paused: /clock stalled for {stalled:.1f} s; robot stopped"
 
     def _watch_upstream(self) -> None:
-        while not self._stop.wait(2.0):
+        """The atlas side of liveness: TERMINATED notices mark inputs lost; a provider that registered
+        anew (restart) is looked up again and followed to its new topics. A provider merely missing from
+        the atlas (the atlas restarted; providers re-register on their next heartbeat) changes nothing."""
+        while not self._stop.wait(WATCH_PERIOD_S):
             try:
-                self._upstream_lost = self._upstream_ok() if self._upstream_ok else ""
-            except Exception as exc:  # atlas unreachable: not a reason to fail a run by itself
+                terminated, rebinds = self._upstream.poll()
+            except Exception as exc:  # atlas unreachable: not a reason to touch a run by itself
                 log.debug("upstream check failed: %s", exc)
+                continue
+            for role in ("map", "odom", "scan"):
+                self.inputs.set_terminated(role, terminated.get(role, ""))
+            for role, b in rebinds.items():
+                if role in ("map", "odom", "scan"):
+                    self.inputs.rebind(role, b)
+                elif role == "cmd_vel":
+                    self._rebind_cmd_vel(b)
 
-    def _health(self, now: float, state: RobotState | None) -> str:
-        """Why the running goal cannot go on ("" when it can)."""
+    def _rebind_cmd_vel(self, b: Binding) -> None:
+        """Command the chassis on its new topic (it registered anew, e.g. restarted, elsewhere)."""
+        new = self.inputs.node.create_publisher(b.topic, Twist, b.qos)
+        with self.lock:
+            old, self.pubs.cmd_vel = self.pubs.cmd_vel, new
+            self.inputs.bindings["cmd_vel"] = b
+        old.close()
+        log.info("cmd_vel rebound to %s (provider %s)", b.topic, b.provider_id or "-")
+
+    def _inputs_lost(self, now: float, state: RobotState | None) -> tuple[dict[str, str], dict[str, str]]:
+        """{source: why} of lost required inputs and of lost optional ones (see ``Inputs.lost``)."""
         to = self.cfg.data_timeout_s
-        age = self.inputs.odom_age(now)
-        if age > to:
-            odom = self.inputs.bindings["odom"].topic
-            return f"no odometry on {odom} for {age:.1f} s" if math.isfinite(age) else f"no odometry on {odom}"
-        if state is None:
-            if self._tf_bad_since is not None and now - self._tf_bad_since > to:
-                f = self.cfg.frames
-                return f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s"
-            return ""
-        f = self.cfg.frames
-        if state.tf_age > to:
-            return f"TF {f.odom}→{f.base} is stale ({state.tf_age:.1f} s old)"
-        if state.map_tf_age > self.cfg.map_tf_timeout_s:
-            return f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old; is the map provider running?)"
-        return ""
+        wall = time.monotonic()
+        # This process was frozen or starved (SIGSTOP, a swapped-out machine): every input looks old until
+        # the samples queued meanwhile are read, so staleness waits one tick; liveliness still counts.
+        # Likewise, our own DDS stack could not hear the writers' liveliness while frozen: their leases ran
+        # out here, not there, and are renewed within a lease; so liveliness losses wait SELF_FREEZE_S too.
+        fresh = wall - self._last_step_wall < max(to, 0.5)
+        if not fresh:
+            self._thawed_at = wall
+        self._last_step_wall = wall
+        live = wall - self._thawed_at > SELF_FREEZE_S
+        req, opt = self.inputs.lost(now, state, to, self.cfg.map_tf_timeout_s, stale_checks=fresh,
+                                    liveliness_checks=live)
+        if state is None and self._tf_bad_since is not None and now - self._tf_bad_since > to:
+            f = self.cfg.frames
+            req.setdefault("TF", f"no TF {f.map}→{f.odom}→{f.base} for {now - self._tf_bad_since:.1f} s")
+        return req, opt
+
+    def _apply_inputs(self, rec: GoalRecord | None, now: float, state: RobotState | None) -> bool:
+        """Pause / resume / fail the live run by its inputs; True when this tick must not drive. Lock held."""
+        req, opt = self._inputs_lost(now, state)
+        verdict = self.grace.update(now, time.monotonic(), req)
+        degraded = "; ".join(f"{k}: {v}" for k, v in sorted(opt.items()))
+        if degraded != self._degraded:
+            self._degraded = degraded
+            if degraded:
+                log.warning("degraded (optional input lost, going on): %s", degraded)
+        if rec is None or rec.state in TERMINAL:
+            if verdict.resumed:
+                self.nav.resume()
+            return False
+        if verdict.state == GRACE_FAILED:
+            self.nav.resume()
+            self._end_active(verdict.detail, canceled=False)
+            return True
+        if verdict.state == GRACE_PAUSED:
+            if not self.nav.paused:
+                log.warning("run %s paused: %s", rec.run_id, verdict.detail)
+            self.nav.pause(verdict.detail)
+            if self._moving or not self._paused_zero_sent:
+                self.publish_zero()
+                self._paused_zero_sent = True
+            return True
+        self._paused_zero_sent = False
+        if verdict.resumed:
+            log.info("run %s resumed: inputs are back", rec.run_id)
+            self.nav.resume()
+        return False
 
     def _step(self, now: float) -> None:
         try:
@@ -320,10 +425,9 @@ class NavLoop:
         with self.lock:
             rec = self.nav.active
             live = rec is not None and rec.state not in TERMINAL
+            hold = self._apply_inputs(rec, now, state)
             if live:
-                why = self._health(now, state)
-                if why:
-                    self._end_active(why, canceled=False)
+                if hold or rec.state in TERMINAL:
                     return
                 if self._paused:
                     return
@@ -337,10 +441,13 @@ class NavLoop:
             cmd = self.nav.tick(now, state.pose, state.vel, grid, scan[0] if scan else None,
                                 scan[1] if scan else None)
             if live:
+                if self._degraded and rec.state == RUNNING:
+                    rec.detail = f"{rec.detail}; degraded: {self._degraded}"
                 self._publish_cmd(rec, cmd.vx, cmd.vy, cmd.wz)
                 if rec.state in TERMINAL:
                     self.speed.run_ended(rec.run_id)
             self._publish_plan(now)
+            self._sync_journal()
 
     def _publish_cmd(self, rec: GoalRecord, vx: float, vy: float, wz: float) -> None:
         if rec.state in (PENDING, RUNNING) or self._moving:

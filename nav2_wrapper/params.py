@@ -61,6 +61,8 @@ class BtNavigatorParams(_Node):
     path_blocked_lookahead: float = Field(2.5, gt=0)
     blocked_timeout: float = Field(2.0, gt=0)
     pending_timeout: float = Field(30.0, gt=0)
+    # s a goal stays paused (robot stopped, RUNNING "waiting for <input>") while a required input is lost
+    input_grace_s: float = Field(5.0, ge=0, le=3600)
     number_of_retries: int = Field(6, ge=0)
     recovery_behaviors: list[Literal["clear_costmaps", "spin", "wait", "backup"]] = \
         ["clear_costmaps", "spin", "wait", "backup"]
@@ -440,7 +442,8 @@ def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str 
                                 simulate_ahead_time=bs.simulate_ahead_time),
         navigator=NavigatorConfig(replan_frequency=bt.replan_frequency, controller_frequency=cs.controller_frequency,
                                   path_blocked_lookahead=bt.path_blocked_lookahead, blocked_timeout=bt.blocked_timeout,
-                                  pending_timeout=bt.pending_timeout, global_frame=bt.global_frame,
+                                  pending_timeout=bt.pending_timeout, input_grace_s=bt.input_grace_s,
+                                  global_frame=bt.global_frame,
                                   robot_base_frame=bt.robot_base_frame),
     )
     if gcm.resolution <= 0 or (cfg.controller.max_vel_x <= 0):

@@ -28,9 +28,10 @@ from robonix_api.hosting import INIT_FAILED, SessionHost, serve_contracts
 from .config import ConfigError, ProviderConfig, parse_config
 from .handlers import NavHandlers
 from .inputs import Inputs
+from .journal import GoalJournal
 from .loop import NavLoop, Publishers
 from .speed import SpeedLimits
-from .upstream import Binding, MissingUpstream, resolve, still_there
+from .upstream import Binding, MissingUpstream, UpstreamWatch, resolve
 
 log = logging.getLogger("nav2_wrapper")
 
@@ -97,14 +98,9 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
                           node.create_publisher(self._plan_topic, PathMsg, "reliable"))
         speed = SpeedLimits(cfg.dynamic_speed, params.config.controller.max_vel_x)
 
-        def upstream_ok() -> str:
-            for role in ("map", "odom"):
-                b = bindings[role]
-                if not still_there(self.svc.atlas, b):
-                    return f"{b.contract_id} provider {b.provider_id!r} left the atlas ({role} lost)"
-            return ""
-
-        loop = NavLoop(Navigator(params.config), inputs, pubs, cfg, speed, upstream_ok)
+        watch = UpstreamWatch(self.svc.atlas, self.svc.id, bindings)
+        loop = NavLoop(Navigator(params.config), inputs, pubs, cfg, speed, watch,
+                       GoalJournal.from_env(self.svc.id))
         deadline = time.monotonic() + cfg.action_wait_s
         while True:
             missing = inputs.missing()

@@ -37,6 +37,7 @@ class NavigatorConfig:
     min_replan_interval: float = 0.25      # s between event-triggered replans
     blocked_timeout: float = 2.0           # s the controller may find no safe command before recovering
     pending_timeout: float = 30.0          # s a goal may wait for the first map + pose
+    input_grace_s: float = 5.0             # s a goal stays paused while a required input is lost (core/grace.py)
     unknown_goal_margin: float = 10.0      # m a goal may lie beyond the current map when planning through unknown
     global_frame: str = "map"
     robot_base_frame: str = "base_link"
@@ -149,6 +150,29 @@ class Navigator:
     def status(self, run_id: str | None = None) -> GoalRecord | None:
         return self.records.get(run_id) if run_id else self.latest
 
+    # ---- pause (a required input is gone; the provider decides when, see core/grace.py) ------------
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def pause(self, detail: str) -> None:
+        """Hold the running goal: it stays RUNNING (or PENDING) with ``detail``; ticks command zero."""
+        rec = self.active
+        if rec is None or rec.state in TERMINAL:
+            return
+        self._paused = True
+        rec.detail = detail
+
+    def resume(self) -> None:
+        """Carry on after a pause: replan at once (the world moved on) and restart the progress window,
+        so the seconds spent standing still do not count as "no progress"."""
+        if not self._paused:
+            return
+        self._paused = False
+        self.progress.reset()
+        self._force_replan = True
+        self._blocked_since = None
+
     def set_speed_limit(self, limit: float, percentage: bool = True) -> None:
         self.controller.set_speed_limit(limit, percentage)
 
@@ -169,6 +193,8 @@ class Navigator:
             shown = rec or self.latest
             return Command(0.0, 0.0, 0.0, shown.state if shown else IDLE, shown.detail if shown else "idle",
                            shown.run_id if shown else "")
+        if self._paused:
+            return self._zero(rec)
         if rec.state == PENDING and not self._start(rec, now, pose):
             return self._zero(rec)
         return self._run(rec, now, pose, vel, dt)
@@ -320,6 +346,7 @@ class Navigator:
         self._last_plan = -math.inf
         self._force_replan = False
         self._blocked_since: float | None = None
+        self._paused = False
 
     def _finish(self, rec: GoalRecord, state: str, detail: str, now: float) -> None:
         rec.state, rec.detail, rec.finished = state, detail, now

@@ -3,6 +3,12 @@
 Callbacks run on one background thread per node (a WaitSet over the readers' ReadConditions), never on
 Cyclone's receive threads, so a slow callback delays only this node's other callbacks, not the network.
 Exceptions in callbacks are logged and the thread carries on.
+
+Liveliness: every writer offers automatic liveliness with a short lease (``ROBONIX_DDS_LIVELINESS_S``,
+see ``qos.writer_qos``), and every reader tracks which of its matched writers are alive. A writer whose
+process was killed or stopped is reported lost after about one lease, and ``on_liveliness(handle,
+alive)`` runs on the dispatch thread like data callbacks, so a consumer hears of a dead upstream from
+the data plane itself, without polling the atlas.
 """
 
 from __future__ import annotations
@@ -10,6 +16,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
@@ -17,6 +24,7 @@ from cyclonedds.core import (
     DDSException,
     GuardCondition,
     InstanceState,
+    Listener,
     ReadCondition,
     SampleState,
     ViewState,
@@ -30,7 +38,7 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from robonix_api.dds.config import DdsConfigError, resolve_config, resolve_domain_id, summarize
-from robonix_api.dds.qos import describe, resolve_qos
+from robonix_api.dds.qos import describe, resolve_qos, writer_qos
 from robonix_api.dds.validate import validate_message
 
 log = logging.getLogger(__name__)
@@ -82,7 +90,8 @@ class Publisher(Generic[M]):
     def __init__(self, node: DdsNode, topic: str, msg_type: type[M], qos: Qos) -> None:
         self.topic, self.msg_type, self.qos = topic, msg_type, qos
         self._node = node
-        self._writer: DataWriter | None = DataWriter(node.participant, node._topic(topic, msg_type), qos)
+        self._writer: DataWriter | None = DataWriter(node.participant, node._topic(topic, msg_type),
+                                                     writer_qos(qos))
 
     def publish(self, msg: M) -> None:
         if self._writer is None:
@@ -113,14 +122,73 @@ class Publisher(Generic[M]):
             w.__del__()
 
 
-class Subscription(Generic[M]):
-    """A typed DDS reader whose samples go to ``callback(msg)`` on the node's dispatch thread."""
+LivelinessCallback = Callable[[int, bool], Any]
 
-    def __init__(self, node: DdsNode, topic: str, msg_type: type[M], callback: Callable[[M], Any], qos: Qos) -> None:
+
+class _LivelinessListener(Listener):
+    """Runs on Cyclone's receive thread: only records the change and wakes the node's dispatch thread."""
+
+    def __init__(self, sub: Subscription[Any]) -> None:
+        super().__init__()
+        self._sub = sub
+
+    def on_liveliness_changed(self, reader: Any, status: Any) -> None:
+        # The status carries the handle as a signed 64-bit value, SampleInfo as unsigned: use unsigned.
+        handle = status.last_publication_handle & 0xFFFF_FFFF_FFFF_FFFF
+        if status.alive_count_change > 0:
+            self._sub._liveliness_event(handle, True)
+        elif status.alive_count_change < 0:
+            self._sub._liveliness_event(handle, False)
+
+
+class Subscription(Generic[M]):
+    """A typed DDS reader whose samples go to ``callback(msg)`` on the node's dispatch thread.
+
+    ``on_liveliness(publication_handle, alive)`` (optional) hears each matched writer become alive and
+    lose liveliness (killed, stopped, or deleted); ``alive_writers()`` is the current set. A sample's
+    writer is ``msg.sample_info.publication_handle``.
+    """
+
+    def __init__(self, node: DdsNode, topic: str, msg_type: type[M], callback: Callable[[M], Any], qos: Qos,
+                 on_liveliness: LivelinessCallback | None = None) -> None:
         self.topic, self.msg_type, self.callback, self.qos = topic, msg_type, callback, qos
+        self.on_liveliness = on_liveliness
         self._node = node
-        self._reader: DataReader | None = DataReader(node.participant, node._topic(topic, msg_type), qos)
+        self._alive: set[int] = set()
+        self._live_events: deque[tuple[int, bool]] = deque()
+        self._live_lock = threading.Lock()
+        self._listener = _LivelinessListener(self)
+        self._reader: DataReader | None = DataReader(node.participant, node._topic(topic, msg_type), qos,
+                                                     listener=self._listener)
         self._cond = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Any)
+
+    def _liveliness_event(self, handle: int, alive: bool) -> None:
+        with self._live_lock:
+            if alive:
+                self._alive.add(handle)
+            else:
+                self._alive.discard(handle)
+            self._live_events.append((handle, alive))
+        self._node._wake()
+
+    def alive_writers(self) -> set[int]:
+        """Publication handles of the matched writers currently alive (per liveliness QoS)."""
+        with self._live_lock:
+            return set(self._alive)
+
+    def _drain_liveliness(self) -> None:
+        """Run ``on_liveliness`` for each recorded change, in order (dispatch thread only)."""
+        while True:
+            with self._live_lock:
+                if not self._live_events:
+                    return
+                handle, alive = self._live_events.popleft()
+            if self.on_liveliness is None:
+                continue
+            try:
+                self.on_liveliness(handle, alive)
+            except Exception:
+                log.exception("liveliness callback for %s raised", self.topic)
 
     def _drain(self) -> None:
         """Take everything pending and run the callback per valid sample (dispatch thread only)."""
@@ -202,9 +270,10 @@ class DdsNode:
         return pub
 
     def create_subscription(self, topic: str, msg_type: type[M], callback: Callable[[M], Any],
-                            qos: str | Qos = "best_effort", depth: int | None = None) -> Subscription[M]:
+                            qos: str | Qos = "best_effort", depth: int | None = None,
+                            on_liveliness: LivelinessCallback | None = None) -> Subscription[M]:
         self._check_open()
-        sub = Subscription(self, topic, msg_type, callback, resolve_qos(qos, depth))
+        sub = Subscription(self, topic, msg_type, callback, resolve_qos(qos, depth), on_liveliness)
         self._ensure_dispatcher()
         with self._dispatch_lock:
             with self._lock:
@@ -224,6 +293,14 @@ class DdsNode:
                 pass
 
     # --- dispatch thread --------------------------------------------------------------------------
+    def _wake(self) -> None:
+        guard = self._guard
+        if guard is not None and not self._closed:
+            try:
+                guard.set(True)
+            except DDSException:  # closing concurrently: nobody is left to wake
+                pass
+
     def _ensure_dispatcher(self) -> None:
         with self._lock:
             if self._thread is not None:
@@ -249,6 +326,7 @@ class DdsNode:
                 with self._lock:
                     subs = [e for e in self._entities if isinstance(e, Subscription)]
                 for s in subs:
+                    s._drain_liveliness()
                     s._drain()
 
     # --- conveniences -----------------------------------------------------------------------------

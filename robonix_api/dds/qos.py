@@ -6,6 +6,9 @@ accepts for ROS 2's ``@final`` types; a reader asking for XCDR2 would never matc
 
 from __future__ import annotations
 
+import math
+import os
+
 from cyclonedds.core import Policy
 from cyclonedds.qos import Qos
 from cyclonedds.util import duration
@@ -25,6 +28,51 @@ _PRESETS: dict[str, tuple[bool, bool, int]] = {
 QOS_NAMES: tuple[str, ...] = tuple(_PRESETS)
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+
+LIVELINESS_ENV = "ROBONIX_DDS_LIVELINESS_S"
+DEFAULT_LIVELINESS_S = 0.5
+
+
+def liveliness_lease_s(raw: str | None = None) -> float:
+    """Writers' automatic-liveliness lease in seconds (``ROBONIX_DDS_LIVELINESS_S``, default 0.5).
+
+    Readers learn that a writer's process died or stalled (SIGKILL, SIGSTOP) within about this lease,
+    from the data plane alone. ``inf`` (or ``off``) keeps DDS's infinite lease. A bad value raises
+    ValueError naming the variable, so a typo in a deploy's ``env:`` fails at start, not silently.
+    """
+    text = os.environ.get(LIVELINESS_ENV, "") if raw is None else raw
+    text = text.strip().lower()
+    if not text:
+        return DEFAULT_LIVELINESS_S
+    if text in ("inf", "infinite", "off"):
+        return math.inf
+    try:
+        v = float(text)
+    except ValueError:
+        raise ValueError(f"{LIVELINESS_ENV}: expected seconds > 0 (or 'inf'), got {text!r}") from None
+    if not v > 0.0 or math.isnan(v):
+        raise ValueError(f"{LIVELINESS_ENV}: expected seconds > 0 (or 'inf'), got {text!r}")
+    if math.isfinite(v) and v < 0.05:
+        raise ValueError(f"{LIVELINESS_ENV}: {v:g} s is below the 0.05 s minimum (loaded machines would "
+                         "report live writers as lost)")
+    return v
+
+
+def writer_qos(qos: Qos, lease_s: float | None = None) -> Qos:
+    """A writer's QoS with automatic liveliness at the configured lease.
+
+    Offering a finite lease stays matchable by every reader that asks for less or equal strictness:
+    ROS 2 readers request AUTOMATIC with an infinite lease (its default), and so do ours, so a ROS 2
+    peer still matches while our readers get LIVELINESS_CHANGED when the writer stops asserting.
+    A QoS that already carries a Liveliness policy is left as given.
+    """
+    if qos[Policy.Liveliness.Automatic] is not None or qos[Policy.Liveliness.ManualByTopic] is not None \
+            or qos[Policy.Liveliness.ManualByParticipant] is not None:
+        return qos
+    lease = liveliness_lease_s() if lease_s is None else lease_s
+    if not math.isfinite(lease):
+        return qos
+    return Qos(Policy.Liveliness.Automatic(duration(seconds=lease)), base=qos)
 
 
 def qos_profile(name: str, depth: int | None = None) -> Qos:
@@ -63,8 +111,13 @@ def describe(qos: Qos) -> dict[str, object]:
     rel = qos[Policy.Reliability.BestEffort]
     dur = qos[Policy.Durability.Volatile]
     hist = qos[Policy.History.KeepAll]
-    return {
+    live = qos[Policy.Liveliness.Automatic]
+    lease = getattr(live, "lease_duration", None)
+    out: dict[str, object] = {
         "reliability": "reliable" if isinstance(rel, Policy.Reliability.Reliable) else "best_effort",
         "durability": "transient_local" if dur is Policy.Durability.TransientLocal else "volatile",
         "depth": getattr(hist, "depth", None),
     }
+    if lease is not None and lease < 2**62:
+        out["liveliness_lease_s"] = lease / 1e9
+    return out

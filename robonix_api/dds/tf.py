@@ -141,24 +141,60 @@ class _Link:
 
 
 class TfBuffer:
-    """Buffered transform tree; with a node, fed from /tf (reliable, depth 100) and /tf_static (latched)."""
+    """Buffered transform tree; with a node, fed from /tf (reliable, depth 100) and /tf_static (latched).
+
+    /tf has one writer per broadcasting process (SLAM's map→odom, the chassis' odom→base_link), so the
+    buffer remembers which writer last sent each dynamic link: when that writer loses DDS liveliness
+    (its process died or stalled), ``lost_links()`` names the link at once, long before its stamp is
+    old enough to call it stale.
+    """
 
     def __init__(self, node: object | None = None, cache_s: float = 10.0) -> None:
         self.cache_s = float(cache_s)
         self._links: dict[str, _Link] = {}
         self._lock = threading.Lock()
         self._changed = threading.Condition(self._lock)
+        self._writer_of: dict[str, int] = {}   # dynamic child frame -> publication handle of its last writer
+        self._dead_writers: set[int] = set()
         self._subs = []
         if node is not None:
             self._subs = [
-                node.create_subscription("/tf", TFMessage, lambda m: self._on_msg(m, False), "reliable", 100),
+                node.create_subscription("/tf", TFMessage, lambda m: self._on_msg(m, False), "reliable", 100,
+                                         on_liveliness=self._on_liveliness),
                 # Depth 100 like tf2's static listener: each static publisher's latched sample must survive.
                 node.create_subscription("/tf_static", TFMessage, lambda m: self._on_msg(m, True), "latched", 100),
             ]
 
     def _on_msg(self, msg: TFMessage, static: bool) -> None:
+        handle = getattr(getattr(msg, "sample_info", None), "publication_handle", 0)
         for ts in msg.transforms:
             self.set_transform(ts, static=static)
+            if not static and handle:
+                with self._lock:
+                    self._writer_of[_norm_frame(ts.child_frame_id)] = handle
+        if handle and not static:
+            with self._lock:
+                self._dead_writers.discard(handle)
+
+    def _on_liveliness(self, handle: int, alive: bool) -> None:
+        with self._lock:
+            if alive:
+                self._dead_writers.discard(handle)
+            else:
+                self._dead_writers.add(handle)
+            self._changed.notify_all()
+
+    def lost_links(self) -> list[tuple[str, str]]:
+        """(parent, child) of each dynamic link whose last /tf writer lost liveliness (died or stalled)."""
+        with self._lock:
+            return sorted((self._links[c].parent, c) for c, h in self._writer_of.items()
+                          if h in self._dead_writers and c in self._links)
+
+    def link_lost(self, child: str) -> bool:
+        """True when the writer that last sent ``child``'s transform lost liveliness."""
+        with self._lock:
+            h = self._writer_of.get(_norm_frame(child))
+            return h is not None and h in self._dead_writers
 
     # --- feeding ----------------------------------------------------------------------------------
     def set_transform(self, ts: TransformStamped, authority: str = "", static: bool = False) -> None:
