@@ -1,7 +1,7 @@
 """Which UDP sockets a participant opens with the project's loopback config.
 
 Cyclone DDS 0.11 binds the two well-known DDSI unicast ports of a participant (discovery and user
-data: 7400 + 250·domain + 10/11 + 2·index) to the wildcard address; there is no option to bind them to
+data: 7400 + 250·domain + 10/11 + 2·index) to the wildcard (unspecified) address; there is no option to bind them to
 the interface address (upstream: eclipse-cyclonedds#1923, #2090). Every other socket it opens is bound
 to 127.0.0.1. The config also sets ``DontRoute``, so nothing it sends leaves through a gateway. This
 test pins that picture: a new wildcard socket, or one on a non-loopback address, fails it.
@@ -9,12 +9,15 @@ test pins that picture: a new wildcard socket, or one on a non-loopback address,
 
 from __future__ import annotations
 
+import ipaddress
 import os
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
 from robonix_api.dds.config import DEFAULT_CONFIG
+
+LOOPBACK = ipaddress.IPv4Address("127.0.0.1")
 
 PROBE = r"""
 import os, sys, time
@@ -41,10 +44,9 @@ for line in open("/proc/self/net/udp").read().splitlines()[1:]:
 """
 
 
-def _addr(hexaddr: str) -> tuple[str, int]:
+def _addr(hexaddr: str) -> tuple[ipaddress.IPv4Address, int]:
     ip_hex, port_hex = hexaddr.split(":")
-    ip = ".".join(str(b) for b in reversed(bytes.fromhex(ip_hex)))
-    return ip, int(port_hex, 16)
+    return ipaddress.IPv4Address(bytes(reversed(bytes.fromhex(ip_hex)))), int(port_hex, 16)
 
 
 def test_loopback_config_sets_dontroute_and_no_multicast() -> None:
@@ -62,8 +64,8 @@ def test_only_the_well_known_unicast_ports_are_wildcard_bound() -> None:
     assert socks, "the participant opened no UDP socket?"
     base = 7400 + 250 * domain
     for ip, port in socks:
-        if ip == "0.0.0.0":
+        if ip.is_unspecified:  # the wildcard address
             assert 0 <= port - base - 10 < 2 * 120, (ip, port)  # d1 or d3 (10/11) + 2·participant index
         else:
-            assert ip == "127.0.0.1", (ip, port)
-    assert any(ip == "127.0.0.1" for ip, _ in socks), socks
+            assert ip == LOOPBACK, (ip, port)
+    assert any(ip == LOOPBACK for ip, _ in socks), socks
