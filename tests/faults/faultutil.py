@@ -1,14 +1,20 @@
-"""Helpers of the fault tests: a navigate call that rides out a busy provider's slow status replies, and
-adopting a boot's deployment token (the SDK's and rbnx's clients send ``$ROBONIX_DEPLOY_TOKEN``)."""
+"""Helpers of the fault tests: a real `rbnx boot` of the sim deploy that the test then hurts (and that
+must still shut down cleanly, leaving no process of any run), a navigate call that rides out a busy
+provider's slow status replies, and adopting a boot's deployment token (the SDK's and rbnx's clients
+send ``$ROBONIX_DEPLOY_TOKEN``)."""
 
 from __future__ import annotations
 
 import json
+import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import grpc
 import pytest
-from e2e.conftest import _grpc_endpoint
+from e2e.conftest import SIM_DEPLOY, _grpc_endpoint, alive, e2e_env, rbnx_cmd, recorded_pids
 from support.procs import wait_until
 
 from robonix_api import auth
@@ -60,3 +66,61 @@ def adopt_token(state_file: Path, monkeypatch: pytest.MonkeyPatch) -> str:
     if token:
         monkeypatch.setenv("ROBONIX_DEPLOY_TOKEN", token)
     return token
+
+
+@dataclass
+class SimBoot:
+    """A booted sim deployment: its process, output file, state file, atlas address and environment."""
+
+    proc: subprocess.Popen[bytes]
+    out: Path
+    state_file: Path
+    atlas: str
+    env: dict[str, str]
+    every_pid: set[tuple[str, int, int | None]] = field(default_factory=set)
+
+    def record_pids(self) -> None:
+        """Remember every process the boot has recorded so far (restarted ones included)."""
+        self.every_pid.update(recorded_pids(self.state_file))
+
+    def output(self) -> str:
+        return self.out.read_text()
+
+    def state(self) -> dict:
+        return json.loads(self.state_file.read_text())
+
+
+@contextmanager
+def sim_boot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, **env: str) -> Iterator[SimBoot]:
+    """`rbnx boot` of examples/sim/deploy.yaml (kitchen, RTF 2, no gateway) until 3/3 entries are ready;
+    on leaving: SIGINT, exit code 0, and no process of any run (first or restarted) left alive."""
+    full_env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", **env)
+    out = tmp_path / "boot.out"
+    with open(out, "w") as fh:
+        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(SIM_DEPLOY), "--no-progress", "--no-gateway",
+                                              "--log-dir", str(tmp_path / "logs")],
+                                env=full_env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL)
+    every_pid: set[tuple[str, int, int | None]] = set()
+    try:
+        def booted() -> bool:
+            if proc.poll() is not None:
+                raise AssertionError(f"rbnx boot exited {proc.returncode}:\n{out.read_text()}")
+            return "3/3 entries ready" in out.read_text()
+
+        wait_until(booted, 150, "the boot summary (3/3 entries ready)")
+        (state_file,) = (tmp_path / "state").glob("boot-*.json")
+        adopt_token(state_file, monkeypatch)
+        run = SimBoot(proc, out, state_file, json.loads(state_file.read_text())["atlas"], full_env, every_pid)
+        run.record_pids()
+        yield run
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(2)
+            try:
+                proc.wait(120)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(10)
+    assert proc.returncode == 0, out.read_text()[-3000:]
+    wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from e2e.conftest import SIM_DEPLOY, _grpc_endpoint, alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
+from e2e.conftest import _grpc_endpoint, wait_until
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
@@ -23,7 +23,7 @@ from robonix_api.proto_gen import map_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
 
-from .faultutil import adopt_token, navigate
+from .faultutil import navigate, sim_boot
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
@@ -61,21 +61,9 @@ def save_map(atlas: str, map_id: str, map_dir: Path) -> GridMap:
 
 def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     map_dir = tmp_path / "maps"
-    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", ROBONIX_MAP_DIR=str(map_dir))
-    out = tmp_path / "boot.out"
-    with open(out, "w") as fh:
-        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(SIM_DEPLOY), "--no-progress", "--no-gateway",
-                                              "--log-dir", str(tmp_path / "logs")],
-                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL)
-    every_pid: set[tuple[str, int, int | None]] = set()
     autosave = map_dir / ".autosave" / "mapping" / "session.npz"
-    try:
-        wait_until(lambda: proc.poll() is None and "3/3 entries ready" in out.read_text(), 150, "boot summary")
-        (state_file,) = (tmp_path / "state").glob("boot-*.json")
-        adopt_token(state_file, monkeypatch)
-        atlas = json.loads(state_file.read_text())["atlas"]
-        every_pid.update(recorded_pids(state_file))
+    with sim_boot(tmp_path, monkeypatch, ROBONIX_MAP_DIR=str(map_dir)) as run:
+        atlas, state_file = run.atlas, run.state_file
 
         state, detail = navigate(atlas, *KITCHEN_GOAL, timeout_s=150)
         assert state == "SUCCEEDED", detail
@@ -99,7 +87,7 @@ def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: P
 
         wait_until(back, 10, "mapping ACTIVE again", 0.05)
         print(f"mapping ACTIVE again {time.monotonic() - t_kill:.2f}s after SIGKILL")
-        every_pid.update(recorded_pids(state_file))
+        run.record_pids()
         log = (tmp_path / "logs" / "mapping.log").read_text()
         assert "restart 1: resumed the autosaved session" in log, log[-2000:]
 
@@ -111,13 +99,3 @@ def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: P
 
         state, detail = navigate(atlas, *BACK_GOAL, timeout_s=150)
         assert state == "SUCCEEDED", detail
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(2)
-            try:
-                proc.wait(120)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
-    assert proc.returncode == 0, out.read_text()[-3000:]
-    wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")

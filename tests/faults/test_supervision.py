@@ -17,12 +17,12 @@ import time
 from pathlib import Path
 
 import pytest
-from e2e.conftest import SIM_DEPLOY, alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
+from e2e.conftest import alive, rbnx_cmd, wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState
 
-from .faultutil import adopt_token, navigate
+from .faultutil import navigate, sim_boot
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
@@ -42,25 +42,8 @@ def _children(state_file: Path) -> dict[str, dict]:
 
 
 def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_succeeds(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2")
-    out = tmp_path / "boot.out"
-    with open(out, "w") as fh:
-        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(SIM_DEPLOY), "--no-progress", "--no-gateway",
-                                              "--log-dir", str(tmp_path / "logs")],
-                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL)
-    every_pid: set[tuple[str, int, int | None]] = set()
-    try:
-        def booted() -> bool:
-            if proc.poll() is not None:
-                raise AssertionError(f"rbnx boot exited {proc.returncode}:\n{out.read_text()}")
-            return "3/3 entries ready" in out.read_text()
-
-        wait_until(booted, 150, "the boot summary (3/3 entries ready)")
-        (state_file,) = (tmp_path / "state").glob("boot-*.json")
-        adopt_token(state_file, monkeypatch)
-        atlas = json.loads(state_file.read_text())["atlas"]
-        every_pid.update(recorded_pids(state_file))
+    with sim_boot(tmp_path, monkeypatch) as run:
+        atlas, state_file, env = run.atlas, run.state_file, run.env
 
         for name in ENTRIES:
             before = _states(atlas)
@@ -84,8 +67,8 @@ def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_su
             new = _children(state_file)[name]
             assert new["pid"] != old["pid"] and new["restarts"] == 1, new
             assert not alive(old["pid"], old["start_ticks"])
-            every_pid.update(recorded_pids(state_file))
-            assert f"{name} killed by signal 9; marked TERMINATED" in out.read_text()
+            run.record_pids()
+            assert f"{name} killed by signal 9; marked TERMINATED" in run.output()
             # the restarted process was told it is a restart
             env_of = Path(f"/proc/{new['pid']}/environ").read_bytes().split(b"\0")
             assert b"RBNX_RESTARTS=1" in env_of, f"{name}: RBNX_RESTARTS=1 not in its environment"
@@ -99,13 +82,3 @@ def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_su
 
         state, detail = navigate(atlas, *KITCHEN_GOAL, timeout_s=150)
         assert state == "SUCCEEDED", detail
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(2)
-            try:
-                proc.wait(120)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
-    assert proc.returncode == 0, out.read_text()[-3000:]
-    wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")
