@@ -171,6 +171,13 @@ class Subscription(Generic[M]):
             self._live_events.append((handle, alive))
         self._node._wake()
 
+    def _seen_from(self, handle: int | None) -> None:
+        """A sample from a writer proves it alive. Cyclone reports a lost lease and a regained one from
+        different threads, so their listener calls can reach us in the wrong order (seen after our own
+        process was frozen: a writer stayed 'lost' while its data kept coming); fresh data repairs that."""
+        if handle is not None and handle not in self._alive:
+            self._liveliness_event(handle, True)
+
     def alive_writers(self) -> set[int]:
         """Publication handles of the matched writers currently alive (per liveliness QoS)."""
         with self._live_lock:
@@ -201,8 +208,10 @@ class Subscription(Generic[M]):
             if not samples:
                 return
             for s in samples:
-                if not getattr(getattr(s, "sample_info", None), "valid_data", False):
+                info = getattr(s, "sample_info", None)
+                if not getattr(info, "valid_data", False):
                     continue
+                self._seen_from(getattr(info, "publication_handle", None))
                 try:
                     self.callback(s)
                 except Exception:

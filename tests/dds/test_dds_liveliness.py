@@ -84,6 +84,26 @@ def test_liveliness_stop_cont_kill_reported_per_writer(node, writer_proc) -> Non
         sub.close()
 
 
+def test_fresh_data_repairs_a_lost_event_delivered_out_of_order(node, writer_proc) -> None:
+    """Cyclone's 'lost' and 'alive again' listener calls come from different threads; if the 'lost' one
+    is delivered last (as after our own process was frozen), the next sample must bring the writer back."""
+    got = threading.Event()
+    sub = node.create_subscription("/live_odom", Odometry, lambda m: got.set(), "reliable")
+    tf = TfBuffer(node)
+    try:
+        assert got.wait(20.0), "no odometry from the writer process"
+        assert poll(lambda: len(sub.alive_writers()) == 1 and tf.can_transform("map", "odom"))
+        (handle,) = sub.alive_writers()
+        sub._liveliness_event(handle, False)  # the late 'lost' call, as the listener would make it
+        for tf_sub in tf._subs:
+            for h in tf_sub.alive_writers():
+                tf_sub._liveliness_event(h, False)
+        assert poll(lambda: sub.alive_writers() == {handle} and not tf.link_lost("odom"), timeout=10.0)
+    finally:
+        tf.close()
+        sub.close()
+
+
 def test_liveliness_writer_matches_a_ros2_style_reader(node) -> None:
     """ROS 2 readers ask for AUTOMATIC liveliness with an infinite lease: they must match our writers."""
     pub = node.create_publisher("/live_match", Odometry, "reliable")
