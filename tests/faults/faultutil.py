@@ -91,27 +91,27 @@ class SimBoot:
 
 
 @contextmanager
-def sim_boot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, **env: str) -> Iterator[SimBoot]:
-    """`rbnx boot` of examples/sim/deploy.yaml (kitchen, RTF 2, no gateway) until 3/3 entries are ready;
+def booted(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, deploy: Path, entries: int, env: dict[str, str],
+           *options: str) -> Iterator[SimBoot]:
+    """`rbnx boot -f deploy --no-gateway` until ``entries`` entries are ready (``options`` go to the boot);
     on leaving: SIGINT, exit code 0, and no process of any run (first or restarted) left alive."""
-    full_env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", **env)
     out = tmp_path / "boot.out"
     with open(out, "w") as fh:
-        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(SIM_DEPLOY), "--no-progress", "--no-gateway",
+        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(deploy), *options, "--no-gateway",
                                               "--log-dir", str(tmp_path / "logs")],
-                                env=full_env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
+                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
     every_pid: set[tuple[str, int, int | None]] = set()
     try:
-        def booted() -> bool:
+        def ready() -> bool:
             if proc.poll() is not None:
                 raise AssertionError(f"rbnx boot exited {proc.returncode}:\n{out.read_text()}")
-            return "3/3 entries ready" in out.read_text()
+            return f"{entries}/{entries} entries ready" in out.read_text()
 
-        wait_until(booted, 150, "the boot summary (3/3 entries ready)")
+        wait_until(ready, 150, f"the boot summary ({entries}/{entries} entries ready)")
         (state_file,) = (tmp_path / "state").glob("boot-*.json")
         adopt_token(state_file, monkeypatch)
-        run = SimBoot(proc, out, state_file, json.loads(state_file.read_text())["atlas"], full_env, every_pid)
+        run = SimBoot(proc, out, state_file, json.loads(state_file.read_text())["atlas"], env, every_pid)
         run.record_pids()
         yield run
     finally:
@@ -124,3 +124,11 @@ def sim_boot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, **env: str) -> Ite
                 proc.wait(10)
     assert proc.returncode == 0, out.read_text()[-3000:]
     wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")
+
+
+@contextmanager
+def sim_boot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, **env: str) -> Iterator[SimBoot]:
+    """examples/sim/deploy.yaml (kitchen, RTF 2, no progress view) booted until its 3 entries are ready."""
+    full_env = e2e_env(tmp_path, RBNX_SIM_SCENE="kitchen", RBNX_SIM_RTF="2", **env)
+    with booted(tmp_path, monkeypatch, SIM_DEPLOY, 3, full_env, "--no-progress") as run:
+        yield run

@@ -9,12 +9,12 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from e2e.conftest import alive, e2e_env, rbnx_cmd, recorded_pids, wait_until
+from e2e.conftest import e2e_env, wait_until
 
 from rbnx.atlas_rpc import CMD, Atlas, Driver, driver_capability
 from robonix_api.types import LifecycleState
 
-from .faultutil import adopt_token
+from .faultutil import booted
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(240)]
 
@@ -56,20 +56,8 @@ def _pid(state_file: Path, name: str) -> int:
 
 
 def test_inactive_comes_back_inactive_and_restart_max_gives_up(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    env = e2e_env(tmp_path)
-    out = tmp_path / "boot.out"
-    with open(out, "w") as fh:
-        proc = subprocess.Popen(rbnx_cmd() + ["boot", "-f", str(_deploy(tmp_path)), "--no-gateway",
-                                              "--log-dir", str(tmp_path / "logs")],
-                                env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL)
-    every_pid: set[tuple[str, int, int | None]] = set()
-    try:
-        wait_until(lambda: proc.poll() is None and "2/2 entries ready" in out.read_text(), 90, "boot summary")
-        (state_file,) = (tmp_path / "state").glob("boot-*.json")
-        adopt_token(state_file, monkeypatch)
-        atlas = json.loads(state_file.read_text())["atlas"]
-        every_pid.update(recorded_pids(state_file))
+    with booted(tmp_path, monkeypatch, _deploy(tmp_path), 2, e2e_env(tmp_path)) as run:
+        atlas, state_file, out = run.atlas, run.state_file, run.out
 
         # pause the consumer, then kill it: it must come back paused (INACTIVE), as it was
         with Atlas(atlas, timeout=5.0) as a:
@@ -84,26 +72,16 @@ def test_inactive_comes_back_inactive_and_restart_max_gives_up(tmp_path: Path, m
         wait_until(lambda: (p := _prov(atlas, "odom_consumer")) is not None and p.registration_id != old_reg
                    and p.state == LifecycleState.INACTIVE and "odom_consumer restarted (inactive" in out.read_text(),
                    20, "odom_consumer back INACTIVE")
-        every_pid.update(recorded_pids(state_file))
+        run.record_pids()
         assert "odom_consumer (service): inactive(restarts 1)" in out.read_text()
 
         # restart_max 1: the first kill is restarted, the second (right after) is not
         subprocess.run(["kill", "-KILL", str(_pid(state_file, "odom_primitive"))], check=True)
         wait_until(lambda: "odom_primitive restarted (active, restart 1" in out.read_text(), 20,
                    "odom_primitive restarted once")
-        every_pid.update(recorded_pids(state_file))
+        run.record_pids()
         subprocess.run(["kill", "-KILL", str(_pid(state_file, "odom_primitive"))], check=True)
         wait_until(lambda: "odom_primitive killed by signal 9; marked TERMINATED on the atlas; not restarted "
                    "(gave up after 1 restarts" in out.read_text(), 20, "odom_primitive given up")
         assert _prov(atlas, "odom_primitive").state == LifecycleState.TERMINATED
-        assert proc.poll() is None  # the boot itself carries on
-    finally:
-        if proc.poll() is None:
-            proc.send_signal(2)
-            try:
-                proc.wait(60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
-    assert proc.returncode == 0, out.read_text()[-3000:]
-    wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")
+        assert run.proc.poll() is None  # the boot itself carries on
