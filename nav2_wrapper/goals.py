@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from robonix_api.geometry import quat_norm, quat_to_yaw
+from robonix_common.geometry import quat_norm, quat_to_yaw
 
 QUAT_TOLERANCE = 1e-3
 

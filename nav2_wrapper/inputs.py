@@ -22,8 +22,8 @@ import numpy as np
 from nav2_wrapper.core import LaserScan as CoreScan
 from robonix_api.dds import LaserScan, OccupancyGrid, Odometry, SimClock, TfBuffer, TfError
 from robonix_api.dds.convert import msg_to_grid
-from robonix_api.geometry import compose
-from robonix_api.grid import GridMap
+from robonix_common.geometry import compose
+from robonix_common.grid import GridMap
 
 from .config import Frames
 from .upstream import Binding

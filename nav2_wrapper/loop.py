@@ -33,7 +33,7 @@ from nav2_wrapper.core.warmup import ready as kernels_ready
 from nav2_wrapper.core.warmup import wait_finished as kernels_wait
 from robonix_api.dds import FrameNotFoundError, Path, TfError, Twist
 from robonix_api.dds.convert import header, pose_stamped, twist
-from robonix_api.geometry import compose
+from robonix_common.geometry import compose
 
 from .config import ProviderConfig
 from .goals import PlanarGoal

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from robonix_api.geometry import compose, quat_to_yaw
+from robonix_common.geometry import compose, quat_to_yaw
 
 
 @dataclass

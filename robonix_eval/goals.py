@@ -10,7 +10,7 @@ import numpy as np
 from scipy import ndimage
 
 from hal_panda_mobile.sim import PandaMobileSim
-from robonix_api.grid import FREE
+from robonix_common.grid import FREE
 
 
 def sample_goals(sim: PandaMobileSim, n: int, seed: int, *, start: Sequence[float] | None = None,

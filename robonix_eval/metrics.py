@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nav2_wrapper.core import Costmap, CostmapConfig, Footprint, GlobalPlanner, PlannerConfig
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 
 class ShortestPaths:

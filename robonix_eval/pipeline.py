@@ -29,8 +29,8 @@ from hal_panda_mobile.sim import (
 from nav2_wrapper.core import Command, LaserScan, Navigator
 from nav2_wrapper.core.navigator import TERMINAL
 from nav2_wrapper.params import load_params
-from robonix_api.geometry import compose
-from robonix_api.grid import GridMap
+from robonix_common.geometry import compose
+from robonix_common.grid import GridMap
 from slam_service.core import Scan, SlamConfig, SlamEngine
 
 from .metrics import ShortestPaths, yaw_error

@@ -22,8 +22,8 @@ import numpy as np
 
 from robonix_api.dds import LaserScan, Odometry, SimClock, TfBroadcaster, TfBuffer, TfError
 from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
-from robonix_api.geometry import compose
 from robonix_api.upstream import Binding
+from robonix_common.geometry import compose
 from slam_service.config import Frames
 from slam_service.core import Scan, SlamEngine
 

@@ -24,7 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from robonix_api.grid import GridMap, MapFileError, atomic_write, load_map_yaml, save_map_yaml
+from robonix_api.mapfile import MapFileError, atomic_write, load_map_yaml, save_map_yaml
+from robonix_common.grid import GridMap
 from slam_service.core import SessionData, SessionFileError, SlamConfig, SlamEngine, load_session
 from slam_service.map_paths import (
     MARKER,
@@ -315,7 +316,7 @@ def resume_engine(session: SessionData, slam_cfg: SlamConfig) -> tuple[SlamEngin
 
     The odometry source kept running while SLAM was down, so the robot's map pose at the first scan after
     the restart is this map->odom composed with the odometry then (the caller's loop does that)."""
-    from robonix_api.geometry import compose, inverse
+    from robonix_common.geometry import compose, inverse
 
     engine = SlamEngine(slam_cfg, "mapping")
     engine.load(session=session, mode="mapping")

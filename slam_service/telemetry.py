@@ -21,7 +21,7 @@ from typing import Any
 
 from robonix_api import telemetry
 from robonix_api.dds import MapLifecycle
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 from slam_service.core import render_map_png
 
 log = logging.getLogger("slam_service.telemetry")

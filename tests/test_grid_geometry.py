@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from robonix_api.geometry import compose, inverse, quat_to_yaw, relative, wrap_angle, yaw_to_quat
-from robonix_api.grid import GridMap, MapFileError, load_map_yaml, save_map_yaml
+from robonix_api.mapfile import MapFileError, load_map_yaml, save_map_yaml
+from robonix_common.geometry import compose, inverse, quat_to_yaw, relative, wrap_angle, yaw_to_quat
+from robonix_common.grid import GridMap
 
 
 def test_map_roundtrip_keeps_rows_and_values(tmp_path):

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 from .errors import SimConfigError, config_error
 from .lidar import Lidar, ScanResult

@@ -28,7 +28,7 @@ def _wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-# Scalar SE(2) ops: the same conventions as robonix_api.geometry.compose/relative, without numpy's
+# Scalar SE(2) ops: the same conventions as robonix_common.geometry.compose/relative, without numpy's
 # per-call overhead (these run at the odometry rate inside the stepping loop).
 def compose(a: Pose, b: Pose) -> Pose:
     c, s = math.cos(a[2]), math.sin(a[2])

@@ -7,7 +7,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from robonix_api.grid import FREE, OCCUPIED, GridMap
+from robonix_common.grid import FREE, OCCUPIED, GridMap
 
 from .scene import Obstacle
 from .shapes import Circle, Rect

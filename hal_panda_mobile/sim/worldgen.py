@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from robonix_api.grid import GridMap, MapFileError, load_map_yaml
+from robonix_api.mapfile import MapFileError, load_map_yaml
+from robonix_common.grid import GridMap
 
 from .errors import SimConfigError
 from .robot import load_robot_description

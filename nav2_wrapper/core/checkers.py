@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from robonix_api.geometry import wrap_angle
+from robonix_common.geometry import wrap_angle
 
 
 @dataclass

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.geometry import wrap_angle
+from robonix_common.geometry import wrap_angle
 
 from .costmap import Costmap
 from .costs import LETHAL, NO_INFORMATION, distance_from_cost

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, HolonomicController

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robonix_api.geometry import wrap_angle
+from robonix_common.geometry import wrap_angle
 
 from .controller import HolonomicController
 from .costmap import Costmap

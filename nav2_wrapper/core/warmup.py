@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 from .costmap import Costmap, CostmapConfig
 from .footprint import Footprint

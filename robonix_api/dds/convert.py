@@ -23,8 +23,8 @@ from robonix_api.dds.messages import (
     TwistWithCovariance,
     Vector3,
 )
-from robonix_api.geometry import quat_to_yaw, yaw_to_quat
-from robonix_api.grid import GridMap
+from robonix_common.geometry import quat_to_yaw, yaw_to_quat
+from robonix_common.grid import GridMap
 
 
 def to_time(stamp: float | Time) -> Time:

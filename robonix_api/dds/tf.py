@@ -14,7 +14,7 @@ import time as _time
 from dataclasses import dataclass
 
 from robonix_api.dds.messages import Header, Quaternion, TFMessage, Time, Transform, TransformStamped, Vector3
-from robonix_api.geometry import quat_to_yaw, yaw_to_quat
+from robonix_common.geometry import quat_to_yaw, yaw_to_quat
 
 
 class TfError(Exception):

@@ -19,8 +19,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.geometry import compose, inverse, relative, transform_points
-from robonix_api.grid import GridMap
+from robonix_common.geometry import compose, inverse, relative, transform_points
+from robonix_common.grid import GridMap
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin

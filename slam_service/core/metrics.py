@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 
 def align_se2(est: ArrayLike, gt: ArrayLike) -> np.ndarray:

@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.grid import FREE, OCCUPIED, UNKNOWN, GridMap
+from robonix_common.grid import FREE, OCCUPIED, UNKNOWN, GridMap
 
 
 class OccupancyGrid:

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from PIL import Image, ImageDraw
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 UNKNOWN_GREY = 205
 

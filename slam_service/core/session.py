@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.grid import atomic_write
+from robonix_api.mapfile import atomic_write
 
 from .posegraph import PoseGraph
 from .types import SlamConfig

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.geometry import compose, relative, wrap_angle
-from robonix_api.grid import GridMap
+from robonix_common.geometry import compose, relative, wrap_angle
+from robonix_common.grid import GridMap
 
 from .types import Scan
 

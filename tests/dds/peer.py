@@ -17,7 +17,7 @@ from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, StaticTfBroadcast
 from robonix_api.dds.clock import ClockPublisher
 from robonix_api.dds.convert import grid_to_msg, laser_scan
 from robonix_api.dds.tf import make_transform
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 CLOCK_START = 1000.0
 

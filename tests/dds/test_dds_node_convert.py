@@ -24,7 +24,7 @@ from robonix_api.dds.convert import (
     twist_to_tuple,
     xyyaw_to_pose,
 )
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 
 def test_topic_names() -> None:

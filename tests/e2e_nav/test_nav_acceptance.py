@@ -23,7 +23,7 @@ from scipy import ndimage
 
 from robonix_api.dds import DdsNode, OccupancyGrid, Odometry
 from robonix_api.dds import Path as PathMsg
-from robonix_api.grid import load_map_yaml
+from robonix_api.mapfile import load_map_yaml
 from robonix_api.proto_gen import map_pb2, sim_pb2
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc

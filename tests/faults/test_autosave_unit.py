@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robonix_api.geometry import compose
+from robonix_common.geometry import compose
 from slam_service.core import SlamConfig, SlamEngine
 from slam_service.core.synthetic import apartment_world, drive
 from slam_service.maps import Autosave, MapIdError, MapStore, resume_engine

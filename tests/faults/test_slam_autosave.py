@@ -18,10 +18,11 @@ from e2e.conftest import _grpc_endpoint, wait_until
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
-from robonix_api.grid import GridMap, load_map_yaml
+from robonix_api.mapfile import load_map_yaml
 from robonix_api.proto_gen import map_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
+from robonix_common.grid import GridMap
 
 from .faultutil import navigate, sim_boot
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hal_panda_mobile.sim import OdomNoise
-from robonix_api.geometry import wrap_angle
+from robonix_common.geometry import wrap_angle
 
 from .conftest import drive, make_sim, room
 

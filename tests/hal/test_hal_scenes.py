@@ -19,7 +19,8 @@ from hal_panda_mobile.sim.raster import rasterize, reachable
 from hal_panda_mobile.sim.robot import robot_from_dict
 from hal_panda_mobile.sim.scene import first_collision
 from hal_panda_mobile.sim.worldgen import ROBOT_CLEAR_RADIUS, merge_cells
-from robonix_api.grid import FREE, OCCUPIED, GridMap, save_map_yaml
+from robonix_api.mapfile import save_map_yaml
+from robonix_common.grid import FREE, OCCUPIED, GridMap
 
 from .conftest import make_sim, ray_distances, room
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nav2_wrapper.core import Footprint, LaserScan, Navigator
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 FOOTPRINT = Footprint.from_robot_yaml()
 

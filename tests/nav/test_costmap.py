@@ -7,7 +7,7 @@ import pytest
 
 from nav2_wrapper.core import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, CostmapConfig, Footprint, LaserScan
 from nav2_wrapper.core.costs import inflation_cost
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 FP = Footprint.from_robot_yaml()
 

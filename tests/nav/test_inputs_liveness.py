@@ -24,7 +24,7 @@ import sys, time
 import numpy as np
 from robonix_api.dds import DdsNode, Odometry, OccupancyGrid, TfBroadcaster, LaserScan
 from robonix_api.dds.convert import grid_to_msg, laser_scan
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 role = sys.argv[1]
 node = DdsNode(name=role)
 if role == "base":

@@ -114,7 +114,7 @@ def test_backup_moves_away_from_a_wall_it_touches_not_into_it() -> None:
     from nav2_wrapper.core.controller import ControllerConfig, HolonomicController
     from nav2_wrapper.core.costmap import Costmap, CostmapConfig
     from nav2_wrapper.core.recoveries import BackUp, RecoveryConfig
-    from robonix_api.grid import GridMap
+    from robonix_common.grid import GridMap
 
     data = np.zeros((80, 80), np.int8)
     data[50:52, :] = 100                     # a wall along y = 2.5 .. 2.6 m

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, Footprint, GlobalPlanner, PlannerConfig
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 
 FP = Footprint.from_robot_yaml()
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 from slam_service.core import ate_rmse, occupied_iou
 
 from .conftest import MappingRun

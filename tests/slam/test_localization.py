@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robonix_api.grid import load_map_yaml, save_map_yaml
+from robonix_api.mapfile import load_map_yaml, save_map_yaml
 from slam_service.core import SlamEngine
 from slam_service.core.synthetic import apartment_world, drive
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robonix_api.geometry import transform_points
+from robonix_common.geometry import transform_points
 from slam_service.core import LookupGrid, match_scan, prepare_scan
 from slam_service.core.matcher import required_margin
 from slam_service.core.synthetic import apartment_world, drive

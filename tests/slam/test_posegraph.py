@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robonix_api.geometry import compose, relative
+from robonix_common.geometry import compose, relative
 from slam_service.core import PoseGraph
 from slam_service.core.metrics import ate_rmse
 from slam_service.core.posegraph import EDGE_LOOP, EDGE_ODOM

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 from slam_service.core import align_se2, ate_rmse, occupied_iou, render_map_png
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from robonix_api.geometry import compose
+from robonix_common.geometry import compose
 from slam_service.core import Scan, SlamConfig, SlamEngine
 from slam_service.core.synthetic import apartment_world, drive
 

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robonix_api.grid import GridMap, load_map_yaml
+from robonix_api.mapfile import load_map_yaml
+from robonix_common.grid import GridMap
 from slam_service.config import ConfigError, load_footprint, parse_config
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id
 

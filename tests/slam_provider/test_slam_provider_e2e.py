@@ -23,7 +23,7 @@ from PIL import Image
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, TfBuffer, Twist
 from robonix_api.dds.convert import laser_scan, twist
-from robonix_api.grid import load_map_yaml
+from robonix_api.mapfile import load_map_yaml
 from robonix_api.proto_gen import map_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from support.procs import wait_until
 
-from robonix_api.grid import GridMap, load_map_yaml
+from robonix_api.mapfile import load_map_yaml
+from robonix_common.grid import GridMap
 from slam_service.map_paths import MARKER, MapDirError, MapIdError, check_id, resolve_map_dir
 from slam_service.maps import MapStore, MapStoreError
 
@@ -130,7 +131,7 @@ def test_concurrent_saves_of_one_id_leave_one_whole_map_and_no_staging(root: Pat
 
 _SAVER = """
 import sys, numpy as np
-from robonix_api.grid import GridMap
+from robonix_common.grid import GridMap
 from slam_service.maps import MapStore
 store = MapStore(sys.argv[1])
 grid = GridMap(np.zeros((400, 400), dtype=np.int8), 0.05, 0.0, 0.0)

@@ -1,78 +1,22 @@
-"""Occupancy grids in ROS conventions, and Nav2 map_server files (PGM + YAML).
-
-Shared by SLAM (writes maps), navigation (reads ``/map``) and the HAL (``from_map`` scenes), so all
-three agree on one convention:
-
-* ``data`` is an ``int8`` array of shape ``(height, width)``; row ``r`` is ``y = origin_y + (r + .5) * res``
-  (row 0 at the bottom, as in ``nav_msgs/OccupancyGrid``), values ``-1`` unknown, ``0..100`` occupancy.
-* ``origin`` is the world pose of the corner of cell (0, 0); a non-zero yaw is kept but rarely used.
+"""Nav2 map_server files (PGM + YAML) for :class:`robonix_common.grid.GridMap`.
 
 Map files follow map_server: the PGM's first row is the top of the map, so rows are flipped on I/O.
 """
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import yaml
-from numpy.typing import NDArray
 
-UNKNOWN = -1
-FREE = 0
-OCCUPIED = 100
+from robonix_common.grid import FREE, OCCUPIED, UNKNOWN, GridMap
 
 
 class MapFileError(ValueError):
     """A map YAML/PGM is malformed; the message names the file and the key."""
-
-
-@dataclass
-class GridMap:
-    data: NDArray[np.int8]
-    resolution: float
-    origin_x: float = 0.0
-    origin_y: float = 0.0
-    origin_yaw: float = 0.0
-    frame_id: str = "map"
-
-    def __post_init__(self) -> None:
-        self.data = np.asarray(self.data, dtype=np.int8)
-        if self.data.ndim != 2:
-            raise ValueError(f"GridMap.data must be 2-D (height, width), got shape {self.data.shape}")
-        if not (self.resolution > 0 and math.isfinite(self.resolution)):
-            raise ValueError(f"GridMap.resolution must be a positive number, got {self.resolution}")
-
-    @property
-    def height(self) -> int:
-        return int(self.data.shape[0])
-
-    @property
-    def width(self) -> int:
-        return int(self.data.shape[1])
-
-    def world_to_cell(self, x: NDArray | float, y: NDArray | float) -> tuple[NDArray, NDArray]:
-        """World coordinates -> (col, row) integer indices (may be out of bounds)."""
-        c, s = math.cos(-self.origin_yaw), math.sin(-self.origin_yaw)
-        dx = np.asarray(x, dtype=float) - self.origin_x
-        dy = np.asarray(y, dtype=float) - self.origin_y
-        lx, ly = c * dx - s * dy, s * dx + c * dy
-        return np.floor(lx / self.resolution).astype(np.int64), np.floor(ly / self.resolution).astype(np.int64)
-
-    def cell_to_world(self, col: NDArray | int, row: NDArray | int) -> tuple[NDArray, NDArray]:
-        """Cell indices -> world coordinates of the cell centres."""
-        lx = (np.asarray(col, dtype=float) + 0.5) * self.resolution
-        ly = (np.asarray(row, dtype=float) + 0.5) * self.resolution
-        c, s = math.cos(self.origin_yaw), math.sin(self.origin_yaw)
-        return self.origin_x + c * lx - s * ly, self.origin_y + s * lx + c * ly
-
-    def in_bounds(self, col: NDArray | int, row: NDArray | int) -> NDArray[np.bool_]:
-        col, row = np.asarray(col), np.asarray(row)
-        return (col >= 0) & (col < self.width) & (row >= 0) & (row < self.height)
 
 
 def load_map_yaml(path: str | os.PathLike[str]) -> GridMap:
