@@ -70,33 +70,33 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         context.set_trailing_metadata(((REGISTRATION_ID_KEY, reg_id),))
         return atlas_pb2.RegisterResponse(id=pid)
 
-    def RegisterPrimitive(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def RegisterPrimitive(self, request: Any, context: grpc.ServicerContext) -> Any:
         return self._register(Kind.PRIMITIVE, request, context, "RegisterPrimitive")
 
-    def RegisterService(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def RegisterService(self, request: Any, context: grpc.ServicerContext) -> Any:
         return self._register(Kind.SERVICE, request, context, "RegisterService")
 
-    def RegisterSkill(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def RegisterSkill(self, request: Any, context: grpc.ServicerContext) -> Any:
         return self._register(Kind.SKILL, request, context, "RegisterSkill")
 
-    def Unregister(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def Unregister(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "Unregister")
         return atlas_pb2.UnregisterResponse(
             was_present=self._run(context, self.registry.unregister, request.id)
         )
 
-    def Heartbeat(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def Heartbeat(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "Heartbeat")
         reg_id = next((str(v) for k, v in context.invocation_metadata() or () if k == REGISTRATION_ID_KEY), "")
         self._run(context, self.registry.heartbeat, request.id, reg_id)
         return atlas_pb2.HeartbeatResponse()
 
-    def SetLifecycleState(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def SetLifecycleState(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "SetLifecycleState")
         prev = self._run(context, self.registry.set_state, request.id, request.state, request.detail)
         return atlas_pb2.SetLifecycleStateResponse(previous_state=int(prev))
 
-    def DeclareCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def DeclareCapability(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "DeclareCapability")
         params = params_from_pb(request.params) if request.HasField("params") else None
         ep = self._run(
@@ -111,7 +111,7 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         )
         return atlas_pb2.DeclareCapabilityResponse(endpoint=ep)
 
-    def Query(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def Query(self, request: Any, context: grpc.ServicerContext) -> Any:
         providers = self._run(
             context,
             self.registry.query,
@@ -126,7 +126,7 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
             p.to_pb(resp.providers.add())
         return resp
 
-    def ConnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def ConnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "ConnectCapability")
         ch = self._run(
             context,
@@ -141,13 +141,13 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
         params_to_pb(ch.params, resp.params)
         return resp
 
-    def DisconnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def DisconnectCapability(self, request: Any, context: grpc.ServicerContext) -> Any:
         self._guard(context, "DisconnectCapability")
         return atlas_pb2.DisconnectCapabilityResponse(
             was_open=self._run(context, self.registry.disconnect, request.channel_id)
         )
 
-    def QueryContract(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def QueryContract(self, request: Any, context: grpc.ServicerContext) -> Any:
         desc = self._run(context, self.registry.query_contract, request.contract_id)
         resp = atlas_pb2.QueryContractResponse(found=desc is not None)
         if desc is None:
@@ -156,13 +156,13 @@ class AtlasServicer(atlas_pb2_grpc.AtlasServicer):
             desc.to_pb(resp.contract)
         return resp
 
-    def ListContracts(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def ListContracts(self, request: Any, context: grpc.ServicerContext) -> Any:
         resp = atlas_pb2.ListContractsResponse()
         for desc in self._run(context, self.registry.list_contracts, request.namespace_prefix):
             desc.to_pb(resp.contracts.add())
         return resp
 
-    def InspectAtlas(self, request: Any, context: grpc.ServicerContext) -> Any:  # noqa: N802
+    def InspectAtlas(self, request: Any, context: grpc.ServicerContext) -> Any:
         return atlas_pb2.InspectAtlasResponse(json=json.dumps(self.registry.snapshot(), sort_keys=True))
 
 

@@ -30,7 +30,7 @@ def sink(seconds: float) -> None:
 
     counts = {"scan": 0, "odom": 0}
 
-    def bump(key: str):  # noqa: ANN202
+    def bump(key: str):
         def cb(_msg: object) -> None:
             counts[key] += 1
         return cb
@@ -62,7 +62,8 @@ def run(seconds: float, workload: str) -> dict:
     child = subprocess.Popen([sys.executable, __file__, "--sink"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                              text=True, env=os.environ.copy())
     try:
-        assert child.stdout is not None and child.stdin is not None
+        assert child.stdout is not None
+        assert child.stdin is not None
         assert child.stdout.readline().strip() == "ready"
         cfg = parse_config({"scene": "warehouse", "real_time_factor": 0})
         sim = build_sim(cfg)

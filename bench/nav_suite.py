@@ -19,10 +19,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hal_panda_mobile.sim import LidarNoise  # noqa: E402
-from robonix_eval.goals import sample_goals  # noqa: E402
-from robonix_eval.pipeline import GoalResult, Pipeline, PipelineOptions  # noqa: E402
-from robonix_eval.slam_loop import ROUTES  # noqa: E402
+from hal_panda_mobile.sim import LidarNoise
+from robonix_eval.goals import sample_goals
+from robonix_eval.pipeline import GoalResult, Pipeline, PipelineOptions
+from robonix_eval.slam_loop import ROUTES
 
 SCENES = ("apartment", "office", "warehouse", "kitchen")
 

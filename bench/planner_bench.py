@@ -25,7 +25,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from nav2_wrapper.core import (  # noqa: E402
+from nav2_wrapper.core import (
     INSCRIBED,
     ControllerConfig,
     Costmap,
@@ -35,7 +35,7 @@ from nav2_wrapper.core import (  # noqa: E402
     HolonomicController,
     PlannerConfig,
 )
-from robonix_common.grid import GridMap  # noqa: E402
+from robonix_common.grid import GridMap
 
 RES = 0.05
 ANCHORS_MS = {"Smac 2D": 243.0, "NavFn": 146.0, "Theta*": 46.0}   # published Nav2 C++ figures, ~75–88 m paths

@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from robonix_eval.slam_loop import run_slam_loops  # noqa: E402
+from robonix_eval.slam_loop import run_slam_loops
 
 SCENES = ("apartment", "warehouse")
 

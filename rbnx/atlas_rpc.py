@@ -6,6 +6,7 @@ stubs directly; every failure becomes an AtlasError with a one-line message.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from dataclasses import dataclass
@@ -101,11 +102,9 @@ class Atlas:
         """Connect to learn the endpoint, then close the channel at once (as robonix consumers do)."""
         resp = self._call("ConnectCapability", atlas_pb2.ConnectCapabilityRequest(
             consumer_id=CONSUMER_ID, provider_id=provider_id, contract_id=contract_id, transport=transport))
-        try:
+        with contextlib.suppress(grpc.RpcError):
             self._stub.DisconnectCapability(atlas_pb2.DisconnectCapabilityRequest(channel_id=resp.channel_id),
                                             timeout=self.timeout)
-        except grpc.RpcError:
-            pass
         return resp.endpoint, resp.params
 
     def list_contracts(self, prefix: str = "") -> list[atlas_pb2.ContractDescriptor]:

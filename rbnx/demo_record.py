@@ -62,7 +62,7 @@ class Recorder:
             self._plan_sub = self._node.create_subscription("/plan", PathMsg, self._on_plan, "reliable", 10)
             self._node.create_subscription("/map", OccupancyGrid, self._on_map, "latched", 1)
             self._node.create_subscription(self._gt_topic(), Odometry, self._on_gt_odom, "reliable", 50)
-        except Exception as exc:  # noqa: BLE001 - DDS is optional for the demo: degrade, say so
+        except Exception as exc:
             self.warnings.append(f"DDS unavailable ({exc}); map.png from the map card, no plan overlay")
             print(f"warning: {self.warnings[-1]}", file=sys.stderr)
             self._close_dds()
@@ -94,7 +94,7 @@ class Recorder:
             if thing is not None:
                 try:
                     thing.close()
-                except Exception:  # noqa: BLE001 - closing at shutdown: nothing useful to do
+                except Exception:
                     pass
 
     # ------------------------------------------------------------------ inputs
@@ -151,7 +151,7 @@ class Recorder:
             return None
         try:
             return tuple(tf.lookup_pose2d("map", "base_link"))  # type: ignore[return-value]
-        except Exception:  # noqa: BLE001 - TfError or a closed buffer: no sample this time
+        except Exception:
             return None
 
     # ------------------------------------------------------------------ views

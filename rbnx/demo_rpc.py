@@ -3,6 +3,7 @@ endpoint), wrapped as small typed methods. Every gRPC failure becomes a DemoErro
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -135,10 +136,8 @@ class DemoRpc:
 
     def cancel(self, run_id: str) -> None:
         """Best effort: used on timeout and Ctrl-C, where a failure must not hide the real reason."""
-        try:
+        with contextlib.suppress(DemoError):
             self.cancel_run(run_id)
-        except DemoError:
-            pass
 
     def cancel_run(self, run_id: str) -> tuple[bool, str]:
         """(accepted, detail) of CancelNavigation; an empty ``run_id`` means the latest run."""

@@ -6,6 +6,7 @@ package and nothing else; /proc is read directly (no psutil) to see what is stil
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import signal
@@ -118,16 +119,12 @@ class ProcGroup:
         return sorted(pids)
 
     def signal(self, sig: int) -> None:
-        try:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.pgid, sig)
-        except (ProcessLookupError, PermissionError):
-            pass
         for p in list(self.extra_pids):
             if pid_alive(p):
-                try:
+                with contextlib.suppress(ProcessLookupError, PermissionError):
                     os.kill(p, sig)
-                except (ProcessLookupError, PermissionError):
-                    pass
 
     def wait_gone(self, timeout: float) -> bool:
         deadline = time.monotonic() + timeout
@@ -233,16 +230,12 @@ def stop_recorded(pid: int | None, pgid: int | None, start_ticks: int | None,
 
     def send(sig: int) -> None:
         if pgid and group_members(pgid):
-            try:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(pgid, sig)
-            except (ProcessLookupError, PermissionError):
-                pass
         for p in [*extra_pids, *([pid] if pid and pid_alive(pid, start_ticks) else [])]:
             if pid_alive(p):
-                try:
+                with contextlib.suppress(ProcessLookupError, PermissionError):
                     os.kill(p, sig)
-                except (ProcessLookupError, PermissionError):
-                    pass
 
     def wait(timeout: float) -> bool:
         deadline = time.monotonic() + timeout

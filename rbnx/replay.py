@@ -80,7 +80,7 @@ class Replayer:
         try:
             reader = Reader(self.path)
             reader.open()
-        except Exception as exc:  # noqa: BLE001 - rosbags raises several types for unreadable files
+        except Exception as exc:
             raise ReplayError(f"{self.path}: cannot read: {exc}") from None
         return reader
 

@@ -231,7 +231,8 @@ class EntryRunner:
         self._future = self.driver.call_async(cmd, config, self.timing.driver_timeout)
 
     def _step_driver(self, now: float, deadline: float) -> None:
-        assert self._future is not None and self.driver is not None
+        assert self._future is not None
+        assert self.driver is not None
         if not self._future.done():
             return
         reply: DriverReply = self.driver.result(self._future)

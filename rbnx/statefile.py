@@ -13,6 +13,7 @@ never signalled.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -96,10 +97,8 @@ def write_state(path: Path, data: dict[str, Any], copy_to: Path | None = None) -
     _write_private(tmp, text)
     os.replace(tmp, path)
     if copy_to is not None:
-        try:
+        with contextlib.suppress(OSError):
             _write_private(copy_to, text)
-        except OSError:
-            pass
 
 
 def _write_private(path: Path, text: str) -> None:
@@ -117,10 +116,8 @@ def read_state(path: Path) -> dict[str, Any] | None:
 
 
 def remove_state(path: Path) -> None:
-    try:
+    with contextlib.suppress(FileNotFoundError):
         path.unlink()
-    except FileNotFoundError:
-        pass
 
 
 def restarts_for_atlas(atlas_addr: str) -> dict[str, int]:

@@ -223,7 +223,7 @@ class Supervisor:
             t.started()
             try:
                 self.atlas_proc = self.respawn_atlas()
-            except Exception as exc:  # noqa: BLE001 (a respawn failure is reported, the boot carries on)
+            except Exception as exc:
                 self.log(f"atlas restart {t.restarts} failed: {exc}")
                 decision = t.on_exit(1, time.monotonic(), time.monotonic())
                 if decision != "restart":

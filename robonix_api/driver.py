@@ -236,7 +236,7 @@ class DriverServicer(robonix_contracts_pb2_grpc.RobonixLifecycleDriverServicer):
     def __init__(self, lifecycle: Lifecycle) -> None:
         self._lifecycle = lifecycle
 
-    def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:  # noqa: N802
+    def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:
         tracer = telemetry.tracer()
         if tracer is None:
             return self._drive(request, context)

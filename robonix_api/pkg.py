@@ -14,7 +14,7 @@ MANIFEST = "package_manifest.yaml"
 _SDK_DIR = Path(__file__).resolve().parent
 
 
-def resolve_id(id: str) -> str:  # noqa: A002  (robonix name)
+def resolve_id(id: str) -> str:
     """``RBNX_INSTANCE_NAME`` overrides ``id``; under ``RBNX_DEPLOY_MANAGED`` it must be non-empty."""
     env = os.environ.get("RBNX_INSTANCE_NAME", "").strip()
     if os.environ.get("RBNX_DEPLOY_MANAGED", "").strip() and not env:

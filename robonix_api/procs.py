@@ -6,6 +6,7 @@ signals every group with SIGTERM, waits, then SIGKILLs what is left, as robonix 
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -48,10 +49,8 @@ class ProcessGroups:
             _signal_group(proc, signal.SIGTERM)
         deadline = time.monotonic() + grace_s
         for proc in procs:
-            try:
+            with contextlib.suppress(subprocess.TimeoutExpired):
                 proc.wait(max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                pass
         for proc in procs:
             # The leader may be gone while others in its group live on: always KILL the group.
             _signal_group(proc, signal.SIGKILL)

@@ -66,7 +66,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
 
     KIND: Kind = Kind.SERVICE
 
-    def __init__(self, id: str, namespace: str, *, pkg_root: str | os.PathLike[str] | None = None,  # noqa: A002
+    def __init__(self, id: str, namespace: str, *, pkg_root: str | os.PathLike[str] | None = None,
                  md_path: str | os.PathLike[str] | None = None, atlas: Any = None) -> None:
         self.id = pkg.resolve_id(id)
         self.namespace = check_namespace(namespace)
@@ -346,7 +346,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                                                       ("grpc.initial_reconnect_backoff_ms", 200),
                                                       ("grpc.min_reconnect_backoff_ms", 200),
                                                       ("grpc.max_reconnect_backoff_ms", 1000)])
-        except Exception as exc:  # noqa: BLE001 (best effort: heartbeats still find a restart)
+        except Exception as exc:
             log.debug("no atlas watch: %s", exc)
             return
         lost = threading.Event()
@@ -369,7 +369,7 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                     except grpc.FutureTimeoutError:
                         ready.cancel()  # unsubscribes it; a new one asks to connect again
                 self._hb_wake.set()
-        except Exception as exc:  # noqa: BLE001 (e.g. interpreter shutdown; heartbeats still work)
+        except Exception as exc:
             log.debug("atlas watch ended: %s", exc)
         finally:
             ch.unsubscribe(on_change)

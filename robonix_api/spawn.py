@@ -26,7 +26,7 @@ def open_log(log: str | os.PathLike[str] | None, pkg_root: Path | None) -> IO[by
     if not isinstance(log, Path) and len(path.parts) == 1:
         path = (pkg_root or Path.cwd()) / "rbnx-build" / "data" / path
     path.parent.mkdir(parents=True, exist_ok=True)
-    return open(path, "ab", buffering=0)  # noqa: SIM115 (closed by the caller once the child has it)
+    return open(path, "ab", buffering=0)
 
 
 class SpawnRegistry:

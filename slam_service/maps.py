@@ -19,7 +19,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -305,10 +305,8 @@ class Autosave:
     def discard(self) -> None:
         """A fresh start: an autosave of an earlier run must never be resumed by a later crash. An
         unusable map_dir is not an error here (saving reports it; the autosave thread warns)."""
-        try:
+        with suppress(OSError):
             self.path.unlink(missing_ok=True)
-        except OSError:
-            pass
 
 
 def resume_engine(session: SessionData, slam_cfg: SlamConfig) -> tuple[SlamEngine, tuple[float, float, float]]:

@@ -30,7 +30,8 @@ def test_world_cell_conversions():
     col, row = g.world_to_cell(0.1, 0.1)
     assert (int(col), int(row)) == (10, 5)
     x, y = g.cell_to_world(col, row)
-    assert math.isclose(float(x), 0.25) and math.isclose(float(y), 0.25)
+    assert math.isclose(float(x), 0.25)
+    assert math.isclose(float(y), 0.25)
 
 
 def test_bad_map_files_name_the_problem(tmp_path):

@@ -75,7 +75,7 @@ def compile_in_background() -> threading.Thread:
         try:
             compile_kernels()
             _done.set()
-        except Exception:  # noqa: BLE001 - a failed warm-up must not kill the provider; plans compile lazily
+        except Exception:
             logging.getLogger("nav2_wrapper").warning("background kernel compile failed", exc_info=True)
         finally:
             _finished.set()

@@ -178,7 +178,7 @@ class LiveState:
             return None
         try:
             x, y, yaw = tf.lookup_pose2d(self.map_frame, self.base_frame)
-        except Exception:  # noqa: BLE001 - TfError or a closed buffer: no pose yet
+        except Exception:
             return None
         return round(x, 4), round(y, 4), round(yaw, 4)
 
@@ -188,7 +188,7 @@ class LiveState:
         frame, angles, ranges = scan
         try:
             x, y, yaw = self._tf.lookup_pose2d(self.map_frame, frame)
-        except Exception:  # noqa: BLE001 - no TF to the laser yet
+        except Exception:
             return []
         a = angles + yaw
         px, py = x + ranges * np.cos(a), y + ranges * np.sin(a)
@@ -341,7 +341,7 @@ class LiveState:
             for step in (self._refresh_providers, self._refresh_nav, self._refresh_footprint):
                 try:
                     step()
-                except Exception:  # noqa: BLE001 - keep polling; the page shows stale data meanwhile
+                except Exception:
                     log.exception("dashboard poll step %s failed", step.__name__)
             self._stop.wait(min(ATLAS_POLL_S, STATUS_POLL_S))
 

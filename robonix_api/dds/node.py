@@ -13,6 +13,7 @@ the data plane itself, without polling the atlas.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -296,10 +297,8 @@ class DdsNode:
             if ent in self._entities:
                 self._entities.remove(ent)
         if isinstance(ent, Subscription) and self._waitset is not None and ent._cond is not None:
-            try:
+            with contextlib.suppress(DDSException):
                 self._waitset.detach(ent._cond)
-            except DDSException:
-                pass
 
     # --- dispatch thread --------------------------------------------------------------------------
     def _wake(self) -> None:

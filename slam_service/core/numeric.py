@@ -15,8 +15,8 @@ _lock = threading.Lock()
 
 
 def load_numeric_stack() -> None:
-    import scipy.ndimage  # noqa: F401
-    import scipy.sparse.linalg  # noqa: F401
+    import scipy.ndimage
+    import scipy.sparse.linalg
     import scipy.spatial  # noqa: F401
 
 

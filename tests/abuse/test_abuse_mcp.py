@@ -52,7 +52,7 @@ class McpActor:
                         fut.set_result(("result", await client.call_tool(name, args)))
                     except MCPError as exc:
                         fut.set_result(("protocol error", exc))
-                    except Exception as exc:  # noqa: BLE001 (reported by the caller)
+                    except Exception as exc:
                         fut.set_result(("broken", exc))
         except BaseException as exc:
             if not ready.done():

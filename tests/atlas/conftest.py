@@ -22,21 +22,21 @@ def atlas_server() -> Iterator[AtlasServer]:
     server.stop(0)
 
 
-@pytest.fixture()
+@pytest.fixture
 def client(atlas_server: AtlasServer) -> Iterator[AtlasClient]:
     c = AtlasClient(atlas_server.address)
     yield c
     c.close()
 
 
-@pytest.fixture()
+@pytest.fixture
 def stub(atlas_server: AtlasServer) -> Iterator[atlas_pb2_grpc.AtlasStub]:
     channel = grpc.insecure_channel(atlas_server.address, options=[("grpc.enable_http_proxy", 0)])
     yield atlas_pb2_grpc.AtlasStub(channel)
     channel.close()
 
 
-@pytest.fixture()
+@pytest.fixture
 def uid() -> str:
     """A suffix that keeps provider ids of tests sharing one atlas apart."""
     return uuid.uuid4().hex[:8]

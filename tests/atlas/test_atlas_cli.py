@@ -92,7 +92,9 @@ def test_busy_port_exits_2_with_one_line() -> None:
 @pytest.mark.parametrize("listen", ["127.0.0.1", "127.0.0.1:notaport", "127.0.0.1:70000"])
 def test_bad_listen_exits_2(listen: str) -> None:
     res = _run_fail("--listen", listen)
-    assert res.returncode == 2 and "listen" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert res.returncode == 2
+    assert "listen" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
 
 
 def test_config_json_as_robonix_rbnx_passes_it() -> None:
@@ -117,7 +119,7 @@ def test_config_json_as_robonix_rbnx_passes_it() -> None:
         _stop(proc)
 
 
-@pytest.mark.parametrize("cfg,word", [
+@pytest.mark.parametrize(("cfg", "word"), [
     ("{listen: 1}", "invalid JSON"),
     ("[1]", "JSON object"),
     ('{"heartbeat_timeout_ms": -5}', "heartbeat_timeout_ms"),
@@ -127,4 +129,5 @@ def test_config_json_as_robonix_rbnx_passes_it() -> None:
 def test_bad_config_json_exits_2_naming_the_field(cfg: str, word: str) -> None:
     res = _run_fail("--config-json", cfg)
     assert res.returncode == 2 and word in res.stderr, res.stderr
-    assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in res.stderr

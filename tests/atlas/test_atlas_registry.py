@@ -40,12 +40,12 @@ def catalogue() -> Catalogue:
     return Catalogue.load()
 
 
-@pytest.fixture()
+@pytest.fixture
 def clock() -> FakeClock:
     return FakeClock()
 
 
-@pytest.fixture()
+@pytest.fixture
 def reg(catalogue: Catalogue, clock: FakeClock) -> Registry:
     return Registry(catalogue, heartbeat_timeout_ms=1000, gc_after_terminated_ms=5000, clock=clock)
 
@@ -78,9 +78,12 @@ def chassis(reg: Registry, pid: str = "chassis") -> str:
 def test_register_and_ephemeral_id(reg: Registry) -> None:
     assert chassis(reg) == "chassis"
     eid = reg.register(Kind.SERVICE, "", "robonix/service/x")
-    assert eid.startswith(EPHEMERAL_PREFIX) and len(eid) > len(EPHEMERAL_PREFIX) + 30
+    assert eid.startswith(EPHEMERAL_PREFIX)
+    assert len(eid) > len(EPHEMERAL_PREFIX) + 30
     [p] = reg.query(id="chassis")
-    assert p.kind == Kind.PRIMITIVE and p.state == LifecycleState.REGISTERED and p.registration_id
+    assert p.kind == Kind.PRIMITIVE
+    assert p.state == LifecycleState.REGISTERED
+    assert p.registration_id
 
 
 def test_register_errors(reg: Registry) -> None:
@@ -104,7 +107,9 @@ def test_takeover_resets_everything(reg: Registry, clock: FakeClock) -> None:
     chassis(reg)
     [p] = reg.query(id="chassis")
     assert p.registration_id != first.registration_id
-    assert p.capabilities == [] and p.state == LifecycleState.REGISTERED and p.state_detail == ""
+    assert p.capabilities == []
+    assert p.state == LifecycleState.REGISTERED
+    assert p.state_detail == ""
     assert reg.channel_count() == 0
     # the endpoint is free again for the new registration
     assert reg.declare("chassis", ODOM, R, "/odom", Ros2Params("reliable")) == "/odom"
@@ -125,7 +130,8 @@ def test_unregister_idempotent_drops_channels(reg: Registry) -> None:
     reg.connect("nav", "chassis", ODOM, R)
     assert reg.unregister("chassis") is True
     assert reg.unregister("chassis") is False
-    assert reg.channel_count() == 0 and reg.query() == []
+    assert reg.channel_count() == 0
+    assert reg.query() == []
 
 
 # --------------------------------------------------------------------------- heartbeat / state
@@ -217,7 +223,9 @@ def test_endpoint_collisions(reg: Registry) -> None:
     chassis(reg, "b")
     assert reg.declare("a", ODOM, R, "/odom", Ros2Params()) == "/odom"
     rewritten = reg.declare("b", ODOM, R, "/odom", Ros2Params())
-    assert rewritten != "/odom" and rewritten.startswith("/odom_t") and is_valid_ros2_name(rewritten)
+    assert rewritten != "/odom"
+    assert rewritten.startswith("/odom_t")
+    assert is_valid_ros2_name(rewritten)
     reg.declare("a", DRIVER, G, "127.0.0.1:7000", GrpcParams())
     with err("ALREADY_EXISTS", "endpoint") as info:
         reg.declare("b", DRIVER, G, "127.0.0.1:7000", GrpcParams())
@@ -303,14 +311,16 @@ def test_connect_rules(reg: Registry) -> None:
         reg.connect("nav", "chassis", ODOM, G)
     ch = reg.connect("nav", "chassis", ODOM, R)
     assert re.fullmatch(r"ch-[0-9a-f]{32}", ch.channel_id)
-    assert ch.endpoint == "/odom" and ch.params == Ros2Params("reliable")
+    assert ch.endpoint == "/odom"
+    assert ch.params == Ros2Params("reliable")
     assert reg.channel_count("chassis") == 1
     assert reg.disconnect(ch.channel_id) is True
     assert reg.disconnect(ch.channel_id) is False
     reg.set_state("chassis", LifecycleState.TERMINATED)
     # robonix's atlas still opens a channel to a TERMINATED provider (the endpoints stay until GC)
     late = reg.connect("nav", "chassis", ODOM, R)
-    assert late.endpoint == "/odom" and reg.channel_count("chassis") == 1
+    assert late.endpoint == "/odom"
+    assert reg.channel_count("chassis") == 1
 
 
 # --------------------------------------------------------------------------- eviction / GC
@@ -324,11 +334,14 @@ def test_eviction_and_gc(reg: Registry, clock: FakeClock) -> None:
     reg.heartbeat("mapping")
     clock.advance_ms(400)  # chassis and skill idle 1200 ms > 1000, mapping 400 ms
     evicted, removed = reg.sweep()
-    assert sorted(evicted) == ["chassis", "skill"] and removed == []
+    assert sorted(evicted) == ["chassis", "skill"]
+    assert removed == []
     [c] = reg.query(id="chassis")
-    assert c.state == LifecycleState.TERMINATED and c.state_detail == "heartbeat lapsed > 1000ms"
+    assert c.state == LifecycleState.TERMINATED
+    assert c.state_detail == "heartbeat lapsed > 1000ms"
     assert c.capabilities  # kept for diagnosis until GC
-    assert reg.channel_count("chassis") == 0 and reg.channel_count("mapping") == 1
+    assert reg.channel_count("chassis") == 0
+    assert reg.channel_count("mapping") == 1
     # a heartbeat does not revive a TERMINATED provider
     reg.heartbeat("skill")
     assert reg.sweep() == ([], [])
@@ -358,9 +371,12 @@ def test_contract_lookup(reg: Registry) -> None:
         reg.query_contract("")
     assert reg.query_contract("robonix/nope") is None
     d = reg.query_contract(ODOM)
-    assert d is not None and d.io_msg_type == "nav_msgs/msg/Odometry"
+    assert d is not None
+    assert d.io_msg_type == "nav_msgs/msg/Odometry"
     ids = [c.id for c in reg.list_contracts("robonix/service/map/")]
-    assert ids == sorted(ids) and len(ids) >= 10 and all(i.startswith("robonix/service/map/") for i in ids)
+    assert ids == sorted(ids)
+    assert len(ids) >= 10
+    assert all(i.startswith("robonix/service/map/") for i in ids)
     assert len(reg.list_contracts()) == len(reg.catalogue) >= 31
 
 

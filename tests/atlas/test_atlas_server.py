@@ -46,12 +46,16 @@ def test_register_takeover_and_errors(stub, uid: str) -> None:
     first = stub.Query(pb.QueryRequest(id=pid)).providers[0].registration_id
     assert stub.RegisterPrimitive(pb.RegisterRequest(id=pid, namespace="robonix/primitive/chassis")).id == pid
     second = stub.Query(pb.QueryRequest(id=pid)).providers[0].registration_id
-    assert first and second and first != second
+    assert first
+    assert second
+    assert first != second
 
     e = rpc_error(stub.RegisterService, pb.RegisterRequest(id=pid, namespace="robonix/service/x"))
-    assert e.code() == grpc.StatusCode.ALREADY_EXISTS and e.details().startswith("id:")
+    assert e.code() == grpc.StatusCode.ALREADY_EXISTS
+    assert e.details().startswith("id:")
     e = rpc_error(stub.RegisterSkill, pb.RegisterRequest(id=f"s-{uid}", namespace=""))
-    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT and e.details() == "namespace: must not be empty"
+    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.details() == "namespace: must not be empty"
     eph = stub.RegisterSkill(pb.RegisterRequest(namespace="robonix/skill")).id
     assert eph.startswith("com.robonix.ephemeral.")
     assert stub.Unregister(pb.UnregisterRequest(id=eph)).was_present
@@ -60,7 +64,8 @@ def test_register_takeover_and_errors(stub, uid: str) -> None:
 
 def test_heartbeat_not_found(stub) -> None:
     e = rpc_error(stub.Heartbeat, pb.HeartbeatRequest(id="nobody-here"))
-    assert e.code() == grpc.StatusCode.NOT_FOUND and "nobody-here" in e.details()
+    assert e.code() == grpc.StatusCode.NOT_FOUND
+    assert "nobody-here" in e.details()
     e = rpc_error(stub.Heartbeat, pb.HeartbeatRequest(id=""))
     assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
 
@@ -81,13 +86,17 @@ def test_declare_rules_over_grpc(stub, uid: str) -> None:
         return stub.DeclareCapability(req).endpoint
 
     e = rpc_error(declare, a, ODOM, pb.TRANSPORT_ROS2, "", None)
-    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT and e.details().startswith("params:")
+    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.details().startswith("params:")
     e = rpc_error(declare, a, ODOM, pb.TRANSPORT_ROS2, "", grpc_params)
-    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT and e.details().startswith("params:")
+    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.details().startswith("params:")
     e = rpc_error(declare, a, ODOM, pb.TRANSPORT_UNSPECIFIED, "/x", ros2)
-    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT and e.details().startswith("transport:")
+    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.details().startswith("transport:")
     e = rpc_error(declare, a, DRIVER, pb.TRANSPORT_GRPC, "", grpc_params)
-    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT and e.details().startswith("endpoint:")
+    assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.details().startswith("endpoint:")
 
     minted = declare(a, ODOM, pb.TRANSPORT_ROS2, "", ros2)
     assert minted.startswith("/rbnx/robonix/primitive/chassis/odom/t")
@@ -97,12 +106,14 @@ def test_declare_rules_over_grpc(stub, uid: str) -> None:
     topic = f"/scan_{uid}"
     assert declare(a, SCAN, pb.TRANSPORT_ROS2, topic, ros2) == topic
     rewritten = declare(b, SCAN, pb.TRANSPORT_ROS2, topic, ros2)
-    assert rewritten.startswith(topic + "_t") and "__" not in rewritten
+    assert rewritten.startswith(topic + "_t")
+    assert "__" not in rewritten
 
     port_ep = f"127.0.0.1:{40000 + int(uid[:4], 16) % 20000}"
     declare(a, DRIVER, pb.TRANSPORT_GRPC, port_ep, grpc_params)
     e = rpc_error(declare, b, DRIVER, pb.TRANSPORT_GRPC, port_ep, grpc_params)
-    assert e.code() == grpc.StatusCode.ALREADY_EXISTS and e.details().startswith("endpoint:")
+    assert e.code() == grpc.StatusCode.ALREADY_EXISTS
+    assert e.details().startswith("endpoint:")
     # the provider's <namespace>/driver may stand next to the shared robonix/lifecycle/driver ...
     assert declare(a, "robonix/primitive/chassis/driver", pb.TRANSPORT_GRPC, port_ep, grpc_params) == port_ep
     # ... but a provider has one driver of its own (robonix rule)
@@ -119,10 +130,13 @@ def test_connect_and_contracts_over_grpc(stub, uid: str) -> None:
             consumer_id="nav", provider_id=pid, contract_id="robonix/no/such", transport=pb.TRANSPORT_ROS2
         ),
     )
-    assert e.code() == grpc.StatusCode.NOT_FOUND and e.details().startswith("contract_id:")
+    assert e.code() == grpc.StatusCode.NOT_FOUND
+    assert e.details().startswith("contract_id:")
 
     resp = stub.QueryContract(pb.QueryContractRequest(contract_id="robonix/no/such"))
-    assert resp.found is False and resp.HasField("contract") and resp.contract.id == ""
+    assert resp.found is False
+    assert resp.HasField("contract")
+    assert resp.contract.id == ""
     e = rpc_error(stub.QueryContract, pb.QueryContractRequest(contract_id=""))
     assert e.code() == grpc.StatusCode.INVALID_ARGUMENT
 
@@ -130,7 +144,9 @@ def test_connect_and_contracts_over_grpc(stub, uid: str) -> None:
         c.id
         for c in stub.ListContracts(pb.ListContractsRequest(namespace_prefix="robonix/service/")).contracts
     ]
-    assert ids == sorted(ids) and ids and all(i.startswith("robonix/service/") for i in ids)
+    assert ids == sorted(ids)
+    assert ids
+    assert all(i.startswith("robonix/service/") for i in ids)
     assert len(stub.ListContracts(pb.ListContractsRequest()).contracts) >= 31
     snap = json.loads(stub.InspectAtlas(pb.InspectAtlasRequest()).json)
     assert {"providers", "capabilities", "channels", "contracts"} <= snap.keys()
@@ -156,7 +172,9 @@ def test_client_end_to_end(client: AtlasClient, uid: str) -> None:
 
     assert client.set_state(chassis, "active") == LifecycleState.INACTIVE
     [p] = client.query(id=chassis)
-    assert p.kind == Kind.PRIMITIVE and p.state == LifecycleState.ACTIVE and p.capability_md == "# chassis"
+    assert p.kind == Kind.PRIMITIVE
+    assert p.state == LifecycleState.ACTIVE
+    assert p.capability_md == "# chassis"
     assert {c.contract_id for c in p.capabilities} == {ODOM, DRIVER}
 
     caps = client.find_capability(contract_id=ODOM, provider_id=chassis)
@@ -172,7 +190,9 @@ def test_client_end_to_end(client: AtlasClient, uid: str) -> None:
     with client.connect_capability(
         consumer_id="nav", provider_id=chassis, contract_id=ODOM, transport="ros2"
     ) as ch:
-        assert ch.endpoint == odom_topic and ch.qos_profile == "reliable" and ch.provider_id == chassis
+        assert ch.endpoint == odom_topic
+        assert ch.qos_profile == "reliable"
+        assert ch.provider_id == chassis
         assert any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])
     assert not any(c["channel_id"] == ch.channel_id for c in client.inspect()["channels"])
     assert ch.close() is False  # idempotent
@@ -187,16 +207,20 @@ def test_client_end_to_end(client: AtlasClient, uid: str) -> None:
     client.set_state(chassis, LifecycleState.TERMINATED, "shutdown")
     assert client.find_capability(contract_id=ODOM, provider_id=chassis) == []
     assert client.query(id=chassis)[0].state == LifecycleState.TERMINATED
-    assert client.unregister(chassis) and client.unregister(mapping)
+    assert client.unregister(chassis)
+    assert client.unregister(mapping)
 
 
 def test_client_contracts(client: AtlasClient) -> None:
     d = client.query_contract(ODOM)
-    assert d is not None and d.kind == Kind.PRIMITIVE and d.mode == "topic_out"
+    assert d is not None
+    assert d.kind == Kind.PRIMITIVE
+    assert d.mode == "topic_out"
     assert [f.name for f in d.msg_fields] == ["header", "child_frame_id", "pose", "twist"]
     assert client.query_contract("robonix/nope") is None
     maps = client.list_contracts("robonix/service/map/")
-    assert [c.id for c in maps] == sorted(c.id for c in maps) and len(maps) >= 10
+    assert [c.id for c in maps] == sorted(c.id for c in maps)
+    assert len(maps) >= 10
     assert client.inspect()["contracts"] == len(client.list_contracts())
 
 
@@ -233,7 +257,8 @@ def test_heartbeat_survives_unavailable_atlas() -> None:
     handle = dead.start_heartbeat("x", period_s=0.02, on_not_found=lambda: None)
     try:
         time.sleep(0.2)
-        assert handle.running and handle.beats == 0
+        assert handle.running
+        assert handle.beats == 0
     finally:
         handle.stop()
         dead.close()
@@ -283,13 +308,16 @@ def test_eviction_terminates_drops_channels_and_allows_reregister() -> None:
         # as robonix's atlas: the channel opens, the record says TERMINATED, find_capability hides it
         late = client.connect_capability(consumer_id="nav", provider_id="lapsing", contract_id=ODOM,
                                          transport="ros2")
-        assert late.endpoint and late.close() is True
+        assert late.endpoint
+        assert late.close() is True
         assert not client.find_capability(contract_id=ODOM, provider_id="lapsing")
 
         registry.heartbeat_timeout_ms = 0  # again: the re-registered provider must not lapse mid-assert
         client.register_primitive("lapsing", "robonix/primitive/chassis")
         [p] = client.query(id="lapsing")
-        assert p.state == LifecycleState.REGISTERED and p.registration_id != rid and p.capabilities == []
+        assert p.state == LifecycleState.REGISTERED
+        assert p.registration_id != rid
+        assert p.capabilities == []
         assert client.declare_capability("lapsing", ODOM, "/odom", "ros2") == "/odom"
     finally:
         client.close()

@@ -77,7 +77,8 @@ def test_descriptor_roundtrip_and_fields() -> None:
     for desc in cat.list():
         assert ContractDescriptor.from_pb(desc.to_pb()) == desc
     odom = cat.get("robonix/primitive/chassis/odom")
-    assert odom.io_msg_type == "nav_msgs/msg/Odometry" and odom.io_srv_type == ""
+    assert odom.io_msg_type == "nav_msgs/msg/Odometry"
+    assert odom.io_srv_type == ""
     assert odom.msg_fields[0] == FieldSpec("header", "std_msgs/Header", False)
     scan = {f.name: f for f in cat.get("robonix/primitive/lidar/lidar").msg_fields}
     assert scan["ranges"] == FieldSpec("ranges", "float32", True, True, 0)
@@ -86,11 +87,13 @@ def test_descriptor_roundtrip_and_fields() -> None:
     assert grid["data"] == FieldSpec("data", "int8", True, True, 0)
     assert grid["info"].type_name == "nav_msgs/MapMetaData"
     nav = cat.get("robonix/service/navigation/navigate")
-    assert nav.io_srv_type == "navigation/srv/Navigate" and nav.msg_fields == ()
+    assert nav.io_srv_type == "navigation/srv/Navigate"
+    assert nav.msg_fields == ()
     assert nav.srv_request_fields == (FieldSpec("goal", "geometry_msgs/PoseStamped", False),)
     assert [f.name for f in nav.srv_response_fields] == ["accepted", "run_id", "detail"]
     driver = cat.get("robonix/lifecycle/driver")
-    assert driver.cross_namespace and driver.kind == Kind.SERVICE
+    assert driver.cross_namespace
+    assert driver.kind == Kind.SERVICE
     assert driver.srv_request_fields[0] == FieldSpec("command", "uint8", True)
 
 

@@ -82,10 +82,17 @@ def test_query_contract_not_found_bytes(atlas_server) -> None:
         desc = decode(one(reply, 1))
         # ContractDescriptor{id=1, kind=3, mode=4, io_srv_type=6, srv_request_fields=9, cross_namespace=12}
         assert one(desc, 1) == b"robonix/lifecycle/driver"
-        assert one(desc, 3) == 2 and one(desc, 4) == b"rpc"
+        assert one(desc, 3) == 2
+        assert one(desc, 4) == b"rpc"
         assert one(desc, 6) == b"lifecycle/srv/Driver"
         assert one(desc, 12) == 1
         first_field = decode(desc[9][0])  # FieldSpec{name=1, type_name=2, is_primitive=3}
         assert (
-            one(first_field, 1) == b"command" and one(first_field, 2) == b"uint8" and one(first_field, 3) == 1
+            one(first_field, 1) == b"command"
+        )
+        assert (
+            one(first_field, 2) == b"uint8"
+        )
+        assert (
+            one(first_field, 3) == 1
         )

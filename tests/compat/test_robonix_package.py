@@ -54,28 +54,34 @@ def test_robonix_api_package_runs_unchanged_under_rbnx_boot(tmp_path: Path) -> N
                 (prov,) = client.query(id=pid)
                 assert prov.state == LifecycleState.ACTIVE, (pid, prov.state, prov.state_detail)
             (lidar,) = client.query(id="compat_lidar")
-            assert lidar.kind.label == "primitive" and LIDAR in {c.contract_id for c in lidar.capabilities}
+            assert lidar.kind.label == "primitive"
+            assert LIDAR in {c.contract_id for c in lidar.capabilities}
 
             # The scan, read on DDS by our own subscriber at the topic the atlas hands out.
             with client.connect_capability(consumer_id="compat_test", provider_id="compat_lidar",
                                            contract_id=LIDAR, transport="ros2") as ch:
                 topic, qos = ch.endpoint, ch.qos_profile
-            assert topic == "/compat_scan" and qos == "best_effort"
+            assert topic == "/compat_scan"
+            assert qos == "best_effort"
             with DdsNode(name="compat_test") as node:
                 scan = node.wait_for_message(topic, LaserScan, 60, "best_effort")
-            assert scan is not None and len(scan.ranges) == 180 and scan.header.frame_id == "laser"
+            assert scan is not None
+            assert len(scan.ranges) == 180
+            assert scan.header.frame_id == "laser"
             assert all(abs(r - 2.0) < 1e-6 for r in scan.ranges)
 
             # gRPC: the @provides_grpc handler, reached at the endpoint the atlas hands out.
             with client.connect_capability(consumer_id="compat_test", provider_id="compat_scan_watch",
                                            contract_id=GET_MODE, transport=Transport.GRPC) as ch:
-                assert ch.params.service_name == "RobonixServiceMapGetMode" and ch.params.method == "GetMode"
+                assert ch.params.service_name == "RobonixServiceMapGetMode"
+                assert ch.params.method == "GetMode"
                 with grpc.insecure_channel(ch.endpoint) as chan:
                     stub = robonix_contracts_pb2_grpc.RobonixServiceMapGetModeStub(chan)
 
                     def counted() -> bool:
                         r = stub.GetMode(map_pb2.GetMode_Request(), timeout=10)
-                        assert r.ok and r.mode == "watching"
+                        assert r.ok
+                        assert r.mode == "watching"
                         return int(r.detail.split()[0]) > 0
 
                     wait_until(counted, 60, "the service to count lidar scans (gRPC get_mode)")
@@ -88,7 +94,9 @@ def test_robonix_api_package_runs_unchanged_under_rbnx_boot(tmp_path: Path) -> N
                                            contract_id=GET_POSE, transport="mcp") as ch:
                 tools, pose = _call_mcp(ch.endpoint)
             assert tools == ["get_pose"]
-            assert pose["ok"] is True and abs(pose["x"] - 2.0) < 1e-6 and pose["frame_id"] == "laser"
+            assert pose["ok"] is True
+            assert abs(pose["x"] - 2.0) < 1e-6
+            assert pose["frame_id"] == "laser"
 
         boot.interrupt()
         boot.wait_all_exited()

@@ -30,8 +30,10 @@ def run_child(uri: str | None, timeout: float = 60.0) -> tuple[subprocess.Comple
 def test_effective_config_is_loopback_without_multicast() -> None:
     cfg = effective_config()
     assert cfg["interfaces"] == ["lo"]
-    assert cfg["multicast_disabled"] and cfg["allow_multicast"] == "false"
-    assert cfg["peers"] == ["127.0.0.1"] and cfg["loopback_only"]
+    assert cfg["multicast_disabled"]
+    assert cfg["allow_multicast"] == "false"
+    assert cfg["peers"] == ["127.0.0.1"]
+    assert cfg["loopback_only"]
 
 
 def test_running_cyclone_selected_only_lo() -> None:
@@ -42,7 +44,8 @@ def test_running_cyclone_selected_only_lo() -> None:
 
 
 def test_node_reports_config(node: DdsNode) -> None:
-    assert node.config["loopback_only"] and node.domain_id == int(os.environ["ROS_DOMAIN_ID"])
+    assert node.config["loopback_only"]
+    assert node.domain_id == int(os.environ["ROS_DOMAIN_ID"])
 
 
 def test_default_config_when_uri_unset(tmp_path: Path) -> None:
@@ -51,7 +54,7 @@ def test_default_config_when_uri_unset(tmp_path: Path) -> None:
     assert DEFAULT_CONFIG.is_file()
 
 
-@pytest.mark.parametrize("content,expect", [
+@pytest.mark.parametrize(("content", "expect"), [
     (None, "does not exist"),
     ("<CycloneDDS><Domain><General>", "not well-formed XML"),
     ("<Cyclone/>", "root element"),

@@ -30,9 +30,11 @@ def test_scan_best_effort(peer: subprocess.Popen, node: DdsNode) -> None:
     assert poll(lambda: len(got) >= 3), "no /scan from the peer process"
     scan = got[-1]
     angles, ranges = scan_to_numpy(scan)
-    assert scan.header.frame_id == "laser" and ranges.size == 360
+    assert scan.header.frame_id == "laser"
+    assert ranges.size == 360
     assert np.allclose(ranges, np.arange(360) * 0.01, atol=1e-6)
-    assert angles[0] == pytest.approx(-math.pi) and angles[1] - angles[0] == pytest.approx(2 * math.pi / 360)
+    assert angles[0] == pytest.approx(-math.pi)
+    assert angles[1] - angles[0] == pytest.approx(2 * math.pi / 360)
 
 
 def test_map_latched_late_subscriber(peer: subprocess.Popen, node: DdsNode) -> None:
@@ -40,7 +42,8 @@ def test_map_latched_late_subscriber(peer: subprocess.Popen, node: DdsNode) -> N
     msg = node.wait_for_message("/map", OccupancyGrid, timeout_s=20.0, qos="latched")
     assert msg is not None, "late subscriber did not receive the latched map"
     grid = msg_to_grid(msg)
-    assert grid.data.shape == (300, 400) and grid.resolution == pytest.approx(0.05)
+    assert grid.data.shape == (300, 400)
+    assert grid.resolution == pytest.approx(0.05)
     assert (grid.origin_x, grid.origin_y) == pytest.approx((-1.0, -2.0))
     assert grid.data[0, :5].tolist() == [-1, 0, 100, 7, -1]
     assert int(grid.data[1, 0]) == 42  # the last of the two maps, not the first
@@ -76,7 +79,8 @@ def test_clock(peer: subprocess.Popen, node: DdsNode) -> None:
     finally:
         clock.close()
     wall = SimClock(None, use_sim_time=False)
-    assert wall.wait_for_first_tick(0) and wall.now() > 1e9
+    assert wall.wait_for_first_tick(0)
+    assert wall.now() > 1e9
 
 
 def test_peer_stops_cleanly_by_pid() -> None:

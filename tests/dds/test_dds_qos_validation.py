@@ -20,7 +20,7 @@ from robonix_api.dds.messages import Header, PoseWithCovariance, Time
 from robonix_api.dds.qos import describe
 
 
-@pytest.mark.parametrize("name,rel,dur,depth", [
+@pytest.mark.parametrize(("name", "rel", "dur", "depth"), [
     ("best_effort", "best_effort", "volatile", 10),
     ("reliable", "reliable", "volatile", 10),
     ("latched", "reliable", "transient_local", 1),
@@ -46,7 +46,7 @@ def test_unknown_preset_lists_valid_names() -> None:
         assert n in str(e.value)
 
 
-@pytest.mark.parametrize("msg,exc,field", [
+@pytest.mark.parametrize(("msg", "exc", "field"), [
     (Odometry(pose=PoseWithCovariance(covariance=np.zeros(35))), ValueError, "Odometry.pose.covariance"),
     (LaserScan(angle_min="0.5"), TypeError, "LaserScan.angle_min"),
     (LaserScan(ranges=np.array(["1", "2"])), TypeError, "LaserScan.ranges"),

@@ -47,15 +47,21 @@ def test_inverse_lookup(buf: TfBuffer) -> None:
 def test_unknown_frame_names_it_and_lists_known(buf: TfBuffer) -> None:
     with pytest.raises(FrameNotFoundError) as e:
         buf.lookup("map", "base_footprint")
-    assert "base_footprint" in str(e.value) and "odom" in str(e.value) and "laser" in str(e.value)
-    assert isinstance(e.value, TfError) and isinstance(e.value, LookupError)
+    assert "base_footprint" in str(e.value)
+    assert "odom" in str(e.value)
+    assert "laser" in str(e.value)
+    assert isinstance(e.value, TfError)
+    assert isinstance(e.value, LookupError)
 
 
 def test_extrapolation_says_requested_and_available(buf: TfBuffer) -> None:
     with pytest.raises(ExtrapolationError) as e:
         buf.lookup("map", "base_link", 20.0)
     msg = str(e.value)
-    assert "20.000000" in msg and "10.000000" in msg and "12.000000" in msg and "future" in msg
+    assert "20.000000" in msg
+    assert "10.000000" in msg
+    assert "12.000000" in msg
+    assert "future" in msg
     with pytest.raises(ExtrapolationError, match="past"):
         buf.lookup("map", "base_link", 5.0)
 

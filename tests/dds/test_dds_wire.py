@@ -110,7 +110,8 @@ def test_type_names(t: type) -> None:
 @pytest.mark.parametrize("t", m.ALL_TYPES, ids=lambda t: t.__name__)
 def test_roundtrip_final_xcdr1(t: type) -> None:
     """Every type is @final, serialises with the CDR_LE header and survives a round trip."""
-    assert t.__idl__.xcdrv1_head == 0 and t.__idl__.default_version == 1
+    assert t.__idl__.xcdrv1_head == 0
+    assert t.__idl__.default_version == 1
     raw = t().serialize()
     assert raw[:4] == HDR
     back = t.deserialize(raw)
@@ -132,14 +133,17 @@ def test_writer_emits_xcdr1_on_the_wire(node: DdsNode) -> None:
     msg = m.Twist(linear=m.Vector3(1.0, 2.0, 3.0))
     pub.publish(msg)
     got = ddspy_take(reader._ref, SampleState.Any | ViewState.Any | InstanceState.Any, 1)
-    assert got and got[0][0][:4] == HDR
+    assert got
+    assert got[0][0][:4] == HDR
     assert got[0][0][:52] == msg.serialize()
 
 
 def test_numeric_fields_arrive_as_numpy() -> None:
     raw = m.LaserScan(ranges=[1.0, 2.0]).serialize()
     back = m.LaserScan.deserialize(raw)
-    assert isinstance(back.ranges, np.ndarray) and back.ranges.dtype == np.float32
+    assert isinstance(back.ranges, np.ndarray)
+    assert back.ranges.dtype == np.float32
     back.ranges[0] = 5.0  # writable copy, not a view of the receive buffer
     grid = m.OccupancyGrid.deserialize(m.OccupancyGrid(data=np.arange(-5, 5, dtype=np.int8)).serialize())
-    assert grid.data.dtype == np.int8 and grid.data.tolist() == list(range(-5, 5))
+    assert grid.data.dtype == np.int8
+    assert grid.data.tolist() == list(range(-5, 5))

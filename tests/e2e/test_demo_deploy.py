@@ -95,15 +95,20 @@ def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     with Image.open(out / "map.png") as img:
         img.verify()
     with Image.open(out / "map.png") as img:
-        assert img.width >= 100 and img.height >= 100
+        assert img.width >= 100
+        assert img.height >= 100
 
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["success"] is True and summary["goals_succeeded"] == 1
+    assert summary["success"] is True
+    assert summary["goals_succeeded"] == 1
     (goal,) = summary["goals"]
-    assert goal["state"] == "SUCCEEDED" and goal["succeeded"] is True
-    assert goal["final_error_m"] < 0.5 and goal["path_length_m"] > 1.0
+    assert goal["state"] == "SUCCEEDED"
+    assert goal["succeeded"] is True
+    assert goal["final_error_m"] < 0.5
+    assert goal["path_length_m"] > 1.0
     assert goal["collision_count"] == 0
-    assert summary["leftover_processes"] == [] and summary["boot_exit_code"] == 0
+    assert summary["leftover_processes"] == []
+    assert summary["boot_exit_code"] == 0
     left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if alive(p[1], p[2])]
     assert not left, left
 
@@ -126,7 +131,8 @@ def test_demo_sigint_mid_goal_shuts_down_and_exits_130(tmp_path: Path) -> None:
             proc.kill()
             proc.wait(30)
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["interrupted"] is True and summary["success"] is False
+    assert summary["interrupted"] is True
+    assert summary["success"] is False
     assert summary["goals"][0]["state"] == "CANCELED"
     assert summary["leftover_processes"] == []
     left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if alive(p[1], p[2])]

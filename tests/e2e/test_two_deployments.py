@@ -75,7 +75,9 @@ def test_shutdown_of_one_deployment_leaves_the_other_running(tmp_path: Path) -> 
     b = Deployment(tmp_path, "b", domain_b)
     try:
         wait_until(lambda: a.booted() and b.booted(), 240, "both deployments to boot (3/3 entries ready)")
-        assert a.state_file != b.state_file and a.state_file.is_file() and b.state_file.is_file()
+        assert a.state_file != b.state_file
+        assert a.state_file.is_file()
+        assert b.state_file.is_file()
         pids_a, pids_b = recorded_pids(a.state_file), recorded_pids(b.state_file)
         assert {n for n, _, _ in pids_b} >= {"rbnx boot", "atlas", "panda_mobile", "mapping", "nav2"}
         run_dirs = sorted((tmp_path / "xdg" / "robonix").iterdir())

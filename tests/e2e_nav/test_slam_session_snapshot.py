@@ -18,10 +18,12 @@ def test_session_snapshot_survives_later_scans(tmp_path: Path) -> None:
         eng.process(scan, odom)
     snap = eng.session()
     nodes = snap.graph.n_nodes
-    assert nodes > 2 and len(snap.points) == nodes
+    assert nodes > 2
+    assert len(snap.points) == nodes
     for scan, odom in zip(rec.scans[n:2 * n], rec.odom[n:2 * n], strict=True):   # the worker goes on
         eng.process(scan, odom)
     assert eng.graph.n_nodes > nodes
     assert snap.graph.n_nodes == nodes
     loaded = load_session(save_session(snap, tmp_path / "session.npz"))
-    assert loaded.graph.n_nodes == nodes and len(loaded.points) == nodes
+    assert loaded.graph.n_nodes == nodes
+    assert len(loaded.points) == nodes

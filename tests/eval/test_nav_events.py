@@ -33,7 +33,8 @@ def test_box_in_path_triggers_replan_and_goal_succeeds() -> None:
     clear = np.maximum(np.abs(new[:, 0] - BOX[0]) - BOX[2] / 2, np.abs(new[:, 1] - BOX[1]) - BOX[3] / 2)
     assert clear.min() > 0.25  # the final plan passes the box by more than the inscribed radius
     assert r.state == "SUCCEEDED", r.detail
-    assert r.collisions == 0 and r.within_tolerance
+    assert r.collisions == 0
+    assert r.within_tolerance
 
 
 def test_goal_in_closed_room_fails_with_reason_and_robot_stops() -> None:
@@ -47,4 +48,5 @@ def test_goal_in_closed_room_fails_with_reason_and_robot_stops() -> None:
     assert "no path" in r.detail or "not reachable" in r.detail or "gave up" in r.detail, r.detail
     assert r.time < 120.0
     assert r.collisions == 0
-    assert r.final_speed < 0.02 and math.isfinite(r.final_error_xy)
+    assert r.final_speed < 0.02
+    assert math.isfinite(r.final_error_xy)

@@ -13,7 +13,7 @@ from robonix_eval.slam_loop import ROUTES
 GAP_BOXES = {"south": (8.0, 5.6, 0.6, 1.1), "north": (8.0, 6.4, 0.6, 1.1)}
 
 
-@pytest.mark.parametrize("std, dropout, nav_map", [(0.02, 0.02, "ground_truth"), (0.03, 0.05, "ground_truth"),
+@pytest.mark.parametrize(("std", "dropout", "nav_map"), [(0.02, 0.02, "ground_truth"), (0.03, 0.05, "ground_truth"),
                                                    (0.03, 0.05, "slam")])
 def test_apartment_route_with_noisy_lidar(std: float, dropout: float, nav_map: str) -> None:
     pipe = Pipeline(PipelineOptions(scene="apartment", seed=0, nav_map=nav_map,  # type: ignore[arg-type]
@@ -29,7 +29,7 @@ def test_apartment_route_with_noisy_lidar(std: float, dropout: float, nav_map: s
     assert sum(r.recoveries for r in results) <= 2
 
 
-@pytest.mark.parametrize("side, noise", [("south", 0.01), ("north", 0.03)])
+@pytest.mark.parametrize(("side", "noise"), [("south", 0.01), ("north", 0.03)])
 def test_passes_a_gap_beside_a_dropped_box(side: str, noise: float) -> None:
     box = GAP_BOXES[side]
     pipe = Pipeline(PipelineOptions(scene="office", seed=0, lidar_noise=LidarNoise(noise_std=noise,
@@ -45,4 +45,5 @@ def test_passes_a_gap_beside_a_dropped_box(side: str, noise: float) -> None:
     r = pipe.run_goals([(14.5, 6.0, 0.0)])[0]
     assert dropped, "the robot never came near the drop point"
     assert r.state == "SUCCEEDED", r.detail
-    assert r.collisions == 0 and r.within_tolerance
+    assert r.collisions == 0
+    assert r.within_tolerance

@@ -43,6 +43,7 @@ def test_deterministic_for_a_seed() -> None:
 def test_goal_sampling_is_seeded_and_separated() -> None:
     pipe = Pipeline(PipelineOptions(scene="office", seed=0))
     a = sample_goals(pipe.sim, 10, seed=1)
-    assert a == sample_goals(pipe.sim, 10, seed=1) and a != sample_goals(pipe.sim, 10, seed=2)
+    assert a == sample_goals(pipe.sim, 10, seed=1)
+    assert a != sample_goals(pipe.sim, 10, seed=2)
     for p, q in zip(a, a[1:], strict=False):
         assert ((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2) ** 0.5 >= 2.0

@@ -36,7 +36,8 @@ def test_autosave_round_trip_resume_and_discard(tmp_path: Path) -> None:
     session = store.read()
     assert session is not None
     resumed, m2o = resume_engine(session, SlamConfig())
-    assert resumed.mode == "mapping" and resumed.graph.n_nodes == eng.graph.n_nodes
+    assert resumed.mode == "mapping"
+    assert resumed.graph.n_nodes == eng.graph.n_nodes
     np.testing.assert_array_equal(resumed.map().data, eng.map().data)
     # map->odom at the last node: composing it with that node's odometry gives the node's map pose
     last = compose(m2o, session.odom[-1])

@@ -30,7 +30,8 @@ def test_backoff_doubles_to_its_cap_and_gives_up_after_max_consecutive_restarts(
         assert t.on_exit(-9, now, up_since=now - 1.0) == "restart"
         assert t.due_at is not None
         delays.append(round(t.due_at - now, 3))
-        assert not t.due(now) and t.due(t.due_at)
+        assert not t.due(now)
+        assert t.due(t.due_at)
         t.started()
     assert delays == [0.5, 1.0, 2.0, 3.0, 3.0]
     assert t.on_exit(-9, now, up_since=now - 1.0) == "give-up"
@@ -48,7 +49,8 @@ def test_a_long_enough_run_clears_the_consecutive_count() -> None:
 
 def test_a_clean_exit_is_not_restarted_on_failure() -> None:
     t = RestartTracker(RestartPolicy("on-failure"))
-    assert t.on_exit(0, 1.0, 0.0) == "stay-down" and t.due_at is None
+    assert t.on_exit(0, 1.0, 0.0) == "stay-down"
+    assert t.due_at is None
 
 
 def test_exit_text_names_the_signal() -> None:
@@ -90,4 +92,5 @@ def test_defaults_without_restart_keys_never_restart(tmp_path: Path) -> None:
     f = tmp_path / "deploy.yaml"
     f.write_text(f"manifestVersion: 1\nname: x\nservice:\n  - name: m\n    path: {REPO / 'slam_service'}\n")
     d = load_deploy(f, {})
-    assert d.entries[0].restart == RestartPolicy() and d.atlas_restart.mode == "never"
+    assert d.entries[0].restart == RestartPolicy()
+    assert d.atlas_restart.mode == "never"

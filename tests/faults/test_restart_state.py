@@ -46,7 +46,7 @@ service:
     return f
 
 
-def _prov(atlas: str, name: str):  # noqa: ANN202
+def _prov(atlas: str, name: str):
     with Atlas(atlas, timeout=5.0) as a:
         return a.provider(name)
 

@@ -73,7 +73,7 @@ class OtlpReceiver:
         receiver = self
 
         class Handler(BaseHTTPRequestHandler):
-            def do_POST(self) -> None:  # noqa: N802
+            def do_POST(self) -> None:
                 body = self.rfile.read(int(self.headers.get("Content-Length", 0)))
                 if self.headers.get("Content-Encoding") == "gzip":
                     body = gzip.decompress(body)
@@ -265,7 +265,8 @@ def test_agent_runs_the_robot_through_the_gateway(deployment: Deployment) -> Non
     out = asyncio.run(asyncio.wait_for(agent(), 3 * DEADLINE_S))
     assert {"list_services", "activate", "deactivate", "configure", "reset", "shutdown"} <= out["tools0"]
     booted = out["booted"]["mapping"]
-    assert booted["state"] == "inactive" and booted["autostart"] is False
+    assert booted["state"] == "inactive"
+    assert booted["autostart"] is False
     assert out["activate"]["state"] == "active"
     assert {"nav2.navigate", "nav2.status", "nav2.cancel", "mapping.save_map", "mapping.map_card",
             "mapping.get_mode"} <= out["tools"]
@@ -274,13 +275,16 @@ def test_agent_runs_the_robot_through_the_gateway(deployment: Deployment) -> Non
     assert out["deactivate"]["state"] == "inactive"
     assert out["home"]["state"] == "SUCCEEDED", out["home"]
     before, after = out["paused_stats"]
-    assert before["integrating"] is False and after["integrating"] is False
+    assert before["integrating"] is False
+    assert after["integrating"] is False
     # paused: scans still arrive, none is integrated and no new map is published
     assert after["engine"]["scans_integrated"] == before["engine"]["scans_integrated"]
     assert after.get("maps_published", 0) == before.get("maps_published", 0)
     assert after["scans_paused"] > before["scans_paused"]
     card = out["card"]
-    assert card["ok"] and card["width"] > 0 and card["height"] > 0
+    assert card["ok"]
+    assert card["width"] > 0
+    assert card["height"] > 0
     assert out["reactivate"]["state"] == "active"
     assert out["save"]["ok"], out["save"]
     assert (deployment.map_dir / "agent_map" / "map.yaml").is_file()
@@ -311,11 +315,14 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
                                                       timeout=60).state in ("SUCCEEDED", "FAILED", "CANCELED"),
                    DEADLINE_S, "the traced goal to end", 0.3)
     (span,) = wait_until(lambda: rx.find("nav.navigate", trace_id=trace_id), 120, "the Navigate span", 0.2)
-    assert span["parent"] == parent and span["service"] == "nav2"
+    assert span["parent"] == parent
+    assert span["service"] == "nav2"
     a = span["attrs"]
     assert a["nav.run_id"] == reply.run_id and a["nav.end_state"] == "SUCCEEDED", a
-    assert a["nav.goal.x"] == pytest.approx(GOALS[0][0]) and a["nav.distance_driven_m"] > 0.5
-    assert a["nav.recoveries"] >= 0 and a["nav.final_error_m"] < 0.5
+    assert a["nav.goal.x"] == pytest.approx(GOALS[0][0])
+    assert a["nav.distance_driven_m"] > 0.5
+    assert a["nav.recoveries"] >= 0
+    assert a["nav.final_error_m"] < 0.5
 
     # an agent's own trace over MCP, through the gateway: the MCP SDKs carry it in _meta.traceparent
     from opentelemetry.sdk.trace import TracerProvider
@@ -342,12 +349,18 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     grids = wait_until(lambda: rx.find("slam.occupancy_grid"), 120, "a slam.occupancy_grid span", 0.2)
     g = grids[-1]["attrs"]
     img = Image.open(io.BytesIO(base64.b64decode(g["png_b64"])))
-    assert img.size == (g["width"], g["height"]) and g["width"] > 20 and g["height"] > 20
-    assert g["frame_id"] == "map" and g["base_frame"] == "base_link" and g["resolution"] > 0
-    assert len(g["footprint_polygon_xy"]) >= 6 and len(g["footprint_polygon_xy"]) % 2 == 0
+    assert img.size == (g["width"], g["height"])
+    assert g["width"] > 20
+    assert g["height"] > 20
+    assert g["frame_id"] == "map"
+    assert g["base_frame"] == "base_link"
+    assert g["resolution"] > 0
+    assert len(g["footprint_polygon_xy"]) >= 6
+    assert len(g["footprint_polygon_xy"]) % 2 == 0
     assert {"robot_x", "robot_y", "robot_yaw", "origin_x", "origin_y"} <= set(g)
     # the agent's lifecycle transitions are spans too (on the provider that made them)
-    assert rx.find("lifecycle.activate", service="mapping") and rx.find("lifecycle.deactivate", service="mapping")
+    assert rx.find("lifecycle.activate", service="mapping")
+    assert rx.find("lifecycle.deactivate", service="mapping")
 
 
 @pytest.mark.timeout(300)
@@ -392,7 +405,9 @@ def test_a_person_at_a_terminal(deployment: Deployment) -> None:
     r = rbnx(deployment, "lifecycle", "-f", deploy, "nosuch", "activate")
     assert r.returncode == 1 and "unknown entry 'nosuch'; known: panda_mobile, mapping, nav2" in r.stderr, r.stderr
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure")
-    assert r.returncode == 2 and "-s KEY=VALUE or --patch" in r.stderr and "Traceback" not in r.stderr
+    assert r.returncode == 2
+    assert "-s KEY=VALUE or --patch" in r.stderr
+    assert "Traceback" not in r.stderr
 
 
 @pytest.mark.timeout(600)

@@ -114,25 +114,34 @@ def test_tools_follow_the_atlas_and_lifecycle_verbs(atlas: str, gateway: Gateway
     assert set(out["after"]) == lifecycle | {"toolbox.navigate"}
     assert out["after"]["toolbox.navigate"].description == "[toolbox] Send the robot to a goal."
     assert out["call"].structured_content == {"accepted": True, "run_id": "r1", "detail": "to x=2.5"}
-    assert out["unknown_tool"].is_error and "toolbox offers: toolbox.navigate" in _text(out["unknown_tool"])
-    assert out["unknown_entry"].is_error and "unknown entry 'nobody'" in _text(out["unknown_entry"]) \
-        and "toolbox" in _text(out["unknown_entry"])
-    assert out["bare"].is_error and "<entry>.<tool>" in _text(out["bare"])
+    assert out["unknown_tool"].is_error
+    assert "toolbox offers: toolbox.navigate" in _text(out["unknown_tool"])
+    assert out["unknown_entry"].is_error
+    assert "unknown entry 'nobody'" in _text(out["unknown_entry"])
+    assert "toolbox" in _text(out["unknown_entry"])
+    assert out["bare"].is_error
+    assert "<entry>.<tool>" in _text(out["bare"])
     svc0 = {s["entry"]: s for s in out["services0"]["services"]}
-    assert svc0["toolbox"]["state"] == "registered" and svc0["ghost"]["state"] == "absent"
+    assert svc0["toolbox"]["state"] == "registered"
+    assert svc0["ghost"]["state"] == "absent"
     assert out["configure"].structured_content["state"] == "inactive", _text(out["configure"])
     assert out["activate"].structured_content["state"] == "active", _text(out["activate"])
     # configure while active: paused, re-INIT with the patch applied, resumed; a rejected config names the field
     assert box[0].configs[0] == {"speed": 1.0, "nested": {"b": 2, "c": 3}}
-    assert out["bad_config"].is_error and "speed: must be >= 0" in _text(out["bad_config"])
-    assert out["not_object"].is_error and "config: must be a JSON object" in _text(out["not_object"])
+    assert out["bad_config"].is_error
+    assert "speed: must be >= 0" in _text(out["bad_config"])
+    assert out["not_object"].is_error
+    assert "config: must be a JSON object" in _text(out["not_object"])
     assert out["reset"].structured_content["state"] == "inactive", _text(out["reset"])
     assert box[0].configs[-1] == DEPLOY_CONFIG
-    assert out["unknown_lc"].is_error and "unknown entry 'nope'; known: toolbox, ghost" in _text(out["unknown_lc"])
-    assert out["absent"].is_error and "ghost: not registered" in _text(out["absent"])
+    assert out["unknown_lc"].is_error
+    assert "unknown entry 'nope'; known: toolbox, ghost" in _text(out["unknown_lc"])
+    assert out["absent"].is_error
+    assert "ghost: not registered" in _text(out["absent"])
     assert out["deactivate"].structured_content["state"] == "inactive"
     assert out["gone"] == lifecycle
-    assert not out["shutdown"].is_error and gateway.stopped == [True]  # type: ignore[attr-defined]
+    assert not out["shutdown"].is_error
+    assert gateway.stopped == [True]
 
 
 def test_handshake_era_client_gets_list_changed(atlas: str, gateway: Gateway) -> None:
@@ -145,7 +154,8 @@ def test_handshake_era_client_gets_list_changed(atlas: str, gateway: Gateway) ->
 
     async def scenario() -> set[str]:
         async with Client(gateway.url, mode="legacy", message_handler=on_message) as c:
-            assert c.server_capabilities.tools is not None and c.server_capabilities.tools.list_changed
+            assert c.server_capabilities.tools is not None
+            assert c.server_capabilities.tools.list_changed
             await c.list_tools()
             box.append(Toolbox(atlas, "toolbox2"))
             for _ in range(600):

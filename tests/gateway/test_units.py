@@ -37,7 +37,8 @@ def _deploy(tmp: Path, autostart: Any) -> Path:
 def test_autostart_sets_the_boot_target(tmp_path: Path, value: Any, autostart: bool, target: str) -> None:
     d = load_deploy(_deploy(tmp_path, value))
     svc, skill = d.entries
-    assert svc.autostart is autostart and not d.warnings
+    assert svc.autostart is autostart
+    assert not d.warnings
     assert EntryRunner(svc, {}, tmp_path / "x.log", Timing()).target == target
     assert EntryRunner(skill, {}, tmp_path / "y.log", Timing()).target == "inactive"  # skills never activate
 
@@ -46,7 +47,8 @@ def test_autostart_must_be_a_boolean(tmp_path: Path) -> None:
     with pytest.raises(ManifestProblems) as exc:
         load_deploy(_deploy(tmp_path, "sometimes"))
     (line,) = exc.value.lines
-    assert "service[0].autostart" in line and "bool" in line
+    assert "service[0].autostart" in line
+    assert "bool" in line
 
 
 def test_telemetry_is_off_unless_the_standard_variables_ask() -> None:
@@ -56,7 +58,9 @@ def test_telemetry_is_off_unless_the_standard_variables_ask() -> None:
     assert not telemetry.enabled({"OTEL_EXPORTER_OTLP_ENDPOINT": "http://x", "OTEL_SDK_DISABLED": "true"})
     assert not telemetry.enabled({"OTEL_EXPORTER_OTLP_ENDPOINT": "http://x", "OTEL_TRACES_EXPORTER": "none"})
     # off in this process: no tracer, no propagation work, no spans to build
-    assert telemetry.tracer() is None and telemetry.grpc_metadata() == [] and GoalSpans.maybe("map") is None
+    assert telemetry.tracer() is None
+    assert telemetry.grpc_metadata() == []
+    assert GoalSpans.maybe("map") is None
 
 
 class _Ctx:
@@ -88,12 +92,16 @@ def test_goal_span_continues_the_callers_trace(monkeypatch: pytest.MonkeyPatch) 
     rec.state, rec.finished, rec.recoveries = "SUCCEEDED", 9.0, 1
     spans.sweep((3.0, 4.0, 0.0))
     (span,) = exporter.get_finished_spans()
-    assert span.name == "nav.navigate" and format(span.context.trace_id, "032x") == tid
+    assert span.name == "nav.navigate"
+    assert format(span.context.trace_id, "032x") == tid
     assert format(span.parent.span_id, "016x") == sid
     a = span.attributes
-    assert a["nav.goal_distance_m"] == pytest.approx(5.0) and a["nav.end_state"] == "SUCCEEDED"
+    assert a["nav.goal_distance_m"] == pytest.approx(5.0)
+    assert a["nav.end_state"] == "SUCCEEDED"
     assert a["nav.distance_driven_m"] == pytest.approx(1.0 + 20 ** 0.5, abs=1e-3)
-    assert a["nav.final_error_m"] == 0.0 and a["nav.recoveries"] == 1 and a["nav.duration_s"] == 8.0
+    assert a["nav.final_error_m"] == 0.0
+    assert a["nav.recoveries"] == 1
+    assert a["nav.duration_s"] == 8.0
 
 
 def test_control_names_unknown_entries_and_bad_patches() -> None:

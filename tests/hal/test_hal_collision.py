@@ -31,8 +31,10 @@ def test_driving_into_a_wall_stops_and_reports_once(robot, yaw):
     events = sim.collisions()
     assert len(events) == 1  # pushing for seconds is one episode
     ev = events[0]
-    assert ev.other_geom == "barrier" and ev.robot_geom == "robot/base"
-    assert 2.0 - 0.02 < ev.x < 2.0 + 0.02 and 1.0 < ev.time < 5.0
+    assert ev.other_geom == "barrier"
+    assert ev.robot_geom == "robot/base"
+    assert 2.0 - 0.02 < ev.x < 2.0 + 0.02
+    assert 1.0 < ev.time < 5.0
     assert sim.collisions(since=ev.time) == []
 
 
@@ -42,7 +44,8 @@ def test_separate_contacts_are_separate_events(robot):
     drive(sim, -0.5, 0.0, 0.0, 1.0)  # back off for longer than the debounce
     drive(sim, 0.5, 0.0, 0.0, 2.0)
     events = sim.collisions()
-    assert len(events) == 2 and events[1].time > events[0].time + 1.0
+    assert len(events) == 2
+    assert events[1].time > events[0].time + 1.0
 
 
 def test_teleport_rejects_collision_and_names_obstacle(robot):

@@ -41,8 +41,10 @@ def test_ranges_match_analytic_walls(robot, pose, mount):
     expected = ray_distances(origin, yaw + myaw + scan.angles(), ROOM_RECTS + [BOX], [CYL])
     assert np.all(np.isfinite(scan.ranges))
     assert np.max(np.abs(scan.ranges - expected)) < 0.01
-    assert len(scan.ranges) == 360 and scan.ranges.dtype == np.float32
-    assert scan.angle_min == pytest.approx(-math.pi) and scan.angle_max < math.pi
+    assert len(scan.ranges) == 360
+    assert scan.ranges.dtype == np.float32
+    assert scan.angle_min == pytest.approx(-math.pi)
+    assert scan.angle_max < math.pi
 
 
 def test_heading_follows_rotation_after_driving(robot):
@@ -55,7 +57,8 @@ def test_heading_follows_rotation_after_driving(robot):
     x, y, yaw = sim.ground_truth()[:3]
     scan = sim.scan()
     expected = ray_distances((x, y), yaw + scan.angles(), ROOM_RECTS + [BOX], [CYL])
-    assert yaw > 0.5 and np.max(np.abs(scan.ranges - expected)) < 0.01
+    assert yaw > 0.5
+    assert np.max(np.abs(scan.ranges - expected)) < 0.01
 
 
 def test_robot_never_sees_itself(robot):
@@ -86,11 +89,13 @@ def test_noise_and_dropouts_seeded(robot):
         return sim.scan().ranges
 
     a, b, c = noisy(3), noisy(3), noisy(4)
-    assert np.array_equal(a, b) and not np.array_equal(a, c)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
     drop = np.isposinf(a)
     assert 0.15 < drop.mean() < 0.35
     err = (a - clean)[~drop]
-    assert 0.01 < err.std() < 0.03 and abs(err.mean()) < 0.005
+    assert 0.01 < err.std() < 0.03
+    assert abs(err.mean()) < 0.005
 
 
 def test_scan_stamp_is_sim_time(robot):

@@ -17,7 +17,8 @@ BIG = room(10.0, 10.0)  # "empty": walls far beyond a 1 m square
 
 def _assert_odom_equals_gt(sim) -> None:
     gt, od = sim.ground_truth(), sim.odometry()
-    assert abs(od.x - gt[0]) < 1e-6 and abs(od.y - gt[1]) < 1e-6
+    assert abs(od.x - gt[0]) < 1e-6
+    assert abs(od.y - gt[1]) < 1e-6
     assert abs(wrap_angle(od.yaw - gt[2])) < 1e-6
     assert np.allclose((od.vx, od.vy, od.wz), gt[3:], atol=1e-6)
 
@@ -47,7 +48,8 @@ def test_holonomic_strafe_square_keeps_heading(robot):
         drive(sim, 0.0, 0.0, 0.0, 0.5)
         _assert_odom_equals_gt(sim)
     x, y, yaw = sim.ground_truth()[:3]
-    assert math.hypot(x - 0.5, y + 0.5) < 0.01 and abs(yaw - 0.7) < 0.005
+    assert math.hypot(x - 0.5, y + 0.5) < 0.01
+    assert abs(yaw - 0.7) < 0.005
 
 
 def test_body_frame_command_moves_along_heading(robot):
@@ -61,17 +63,21 @@ def test_body_frame_command_moves_along_heading(robot):
 def test_limits_clamp_and_acceleration(robot):
     sim = make_sim(robot, BIG)
     st = sim.set_cmd_vel(5.0, -5.0, 10.0)
-    assert st.clamped and (st.vx, st.vy, st.wz) == (0.5, -0.5, 1.9)
+    assert st.clamped
+    assert (st.vx, st.vy, st.wz) == (0.5, -0.5, 1.9)
     sim.step_for(0.1)  # yaw accel limit 3 rad/s^2
     assert 0.25 < sim.ground_truth()[5] <= 0.3 + 1e-6
     sim.reset()
     sim.set_cmd_vel(5.0, -5.0, 0.0)
     sim.step_for(0.1)  # linear accel limit 1.5 m/s^2 (without rotation, body and world frames agree)
     _, _, _, vx, vy, _ = sim.ground_truth()
-    assert 0.13 < vx <= 0.15 + 1e-6 and -0.15 - 1e-6 <= vy < -0.13
+    assert 0.13 < vx <= 0.15 + 1e-6
+    assert -0.15 - 1e-6 <= vy < -0.13
     drive(sim, 5.0, -5.0, 10.0, 1.5)
     _, _, _, vx, vy, wz = sim.ground_truth()
-    assert abs(vx - 0.5) < 0.01 and abs(vy + 0.5) < 0.01 and abs(wz - 1.9) < 0.01
+    assert abs(vx - 0.5) < 0.01
+    assert abs(vy + 0.5) < 0.01
+    assert abs(wz - 1.9) < 0.01
 
 
 def test_stale_command_stops_the_base(robot):
@@ -115,7 +121,8 @@ def test_odometry_frame_at_start_option(robot):
     sim = make_sim(robot, {**BIG, "start": [1.0, 2.0, 0.5]}, odom_frame_at_start=True)
     drive(sim, 0.4, 0.0, 0.0, 1.0)
     od, gt = sim.odometry(), sim.ground_truth()
-    assert abs(od.yaw) < 1e-6 and od.y == pytest.approx(0.0, abs=1e-6)
+    assert abs(od.yaw) < 1e-6
+    assert od.y == pytest.approx(0.0, abs=1e-6)
     assert od.x == pytest.approx(math.hypot(gt[0] - 1.0, gt[1] - 2.0), abs=1e-6)
 
 
@@ -124,6 +131,7 @@ def test_reset_replays_identically(robot):
     drive(sim, 0.3, 0.1, 0.2, 1.0)
     first = (sim.ground_truth(), sim.odometry())
     sim.reset()
-    assert sim.time == 0.0 and sim.ground_truth()[:3] == (0.0, 0.0, 0.0)
+    assert sim.time == 0.0
+    assert sim.ground_truth()[:3] == (0.0, 0.0, 0.0)
     drive(sim, 0.3, 0.1, 0.2, 1.0)
     assert (sim.ground_truth(), sim.odometry()) == first

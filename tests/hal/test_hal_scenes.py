@@ -75,7 +75,8 @@ def test_merge_cells_covers_exactly():
     for r0, r1, c0, c1 in rects:
         assert not rebuilt[r0:r1, c0:c1].any()  # no overlaps
         rebuilt[r0:r1, c0:c1] = True
-    assert np.array_equal(rebuilt, occ) and len(rects) < occ.sum()
+    assert np.array_equal(rebuilt, occ)
+    assert len(rects) < occ.sum()
 
 
 def _write_map(tmp_path) -> str:
@@ -108,13 +109,16 @@ def test_from_map_scan_matches_map_walls(robot, tmp_path):
 def test_ground_truth_grid_matches_scene(robot):
     sim = make_sim(robot, room(boxes=[{"center": [1.0, 1.0], "size": [1.0, 0.5], "height": 0.5}]))
     g = sim.ground_truth_grid(0.05)
-    assert (g.width, g.height) == (160, 120) and (g.origin_x, g.origin_y) == (-4.0, -3.0)
+    assert (g.width, g.height) == (160, 120)
+    assert (g.origin_x, g.origin_y) == (-4.0, -3.0)
 
     def at(x, y):
         c, r = g.world_to_cell(x, y)
         return int(g.data[r, c])
 
-    assert at(0.0, 0.0) == FREE and at(1.0, 1.0) == OCCUPIED and at(-3.95, 0.0) == OCCUPIED
+    assert at(0.0, 0.0) == FREE
+    assert at(1.0, 1.0) == OCCUPIED
+    assert at(-3.95, 0.0) == OCCUPIED
     assert at(1.6, 1.0) == FREE
     low = sim.ground_truth_grid(0.05, min_height=0.6)  # the 0.5 m box is below a 0.6 m plane
     c, r = low.world_to_cell(1.0, 1.0)
@@ -126,7 +130,8 @@ def test_ground_truth_grid_matches_scene(robot):
 def test_unknown_scene_lists_available():
     with pytest.raises(SimConfigError) as exc:
         load_scene("castle")
-    assert "castle" in str(exc.value) and all(n in str(exc.value) for n in BUILTIN)
+    assert "castle" in str(exc.value)
+    assert all(n in str(exc.value) for n in BUILTIN)
 
 
 def test_malformed_yaml(tmp_path):
@@ -143,7 +148,7 @@ def test_bad_wall_thickness_names_field():
         load_scene(scene)
 
 
-@pytest.mark.parametrize("patch,field", [
+@pytest.mark.parametrize(("patch", "field"), [
     ({"bounds": [0, 0, -1, 5]}, "bounds"),
     ({"boxes": [{"center": [1, 1], "size": [0, 1]}]}, r"boxes\[0\]\.size"),
     ({"cylinders": [{"center": [1, 1], "radius": 0.2, "hieght": 1}]}, r"cylinders\[0\]\.hieght: unknown field"),
@@ -182,5 +187,6 @@ def test_from_map_missing_file(tmp_path):
 
 def test_robot_description_is_the_repo_config():
     r = load_robot_description()
-    assert r.footprint_box == (0.0, 0.0, 0.7, 0.5) and r.lidar.beams == 360
+    assert r.footprint_box == (0.0, 0.0, 0.7, 0.5)
+    assert r.lidar.beams == 360
     assert math.isclose(r.limits.max_wz, 1.9)

@@ -29,4 +29,4 @@ procs = procs_fixture(HalProcess, newest_first=False)
 @pytest.fixture(scope="module")
 def hal_factory(procs: Callable[..., HalProcess]) -> Iterator[Callable[[str], HalProcess]]:
     """``hal_factory(name)`` starts a HAL child; all are stopped (by PID) at module end."""
-    yield lambda name: procs(HAL, name)
+    return lambda name: procs(HAL, name)

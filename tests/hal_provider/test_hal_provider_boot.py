@@ -55,7 +55,8 @@ def test_rbnx_boot_hal_only_and_sigint_leaves_nothing(tmp_path: Path) -> None:
             wait_until(lambda: wanted <= contracts(), 60, lambda: f"{sorted(wanted)} declared (has {sorted(contracts())})")
         with DdsNode(name="boot_test") as node:
             scan = node.wait_for_message("/scan", LaserScan, 60, "best_effort")
-            assert scan is not None and len(scan.ranges) == 360
+            assert scan is not None
+            assert len(scan.ranges) == 360
 
         boot.interrupt()
         assert "CMD_SHUTDOWN ok" in boot.output()

@@ -113,10 +113,12 @@ def test_topics_types_and_frames(seen: Latest, node: DdsNode) -> None:
     wait_until(lambda: all(seen.get(t) for t in ("/scan", "/odom", "/tf", "/clock", "/ground_truth/odom")), 60,
                "every topic while active")
     scan: LaserScan = seen.get("/scan")
-    assert scan.header.frame_id == "laser" and len(scan.ranges) == 360
+    assert scan.header.frame_id == "laser"
+    assert len(scan.ranges) == 360
     assert math.isclose(scan.angle_min, -math.pi, rel_tol=1e-6)
     assert math.isclose(scan.angle_increment, 2 * math.pi / 360, rel_tol=1e-5)
-    assert math.isclose(scan.range_min, 0.05, rel_tol=1e-6) and math.isclose(scan.range_max, 12.0)
+    assert math.isclose(scan.range_min, 0.05, rel_tol=1e-6)
+    assert math.isclose(scan.range_max, 12.0)
     assert math.isclose(scan.scan_time, 0.1, rel_tol=1e-6)
     finite = np.isfinite(np.asarray(scan.ranges))
     assert finite.sum() > 300  # a closed apartment: almost every beam hits something
@@ -143,11 +145,14 @@ def test_cmd_vel_moves_robot_and_odom_follows(seen: Latest, hal: HalProcess, nod
     start = gt(hal)
     drive(node, 0.4, 0.0, 0.0, lambda: gt(hal).x > start.x + 0.3)
     end = gt(hal)
-    assert end.x - start.x > 0.3 and abs(end.y - start.y) < 0.05 and end.sim_time > start.sim_time
+    assert end.x - start.x > 0.3
+    assert abs(end.y - start.y) < 0.05
+    assert end.sim_time > start.sim_time
     # noise off: /odom (odom frame == world frame by default) follows ground truth
     wait_until(lambda: seen.get("/odom").header.stamp.to_sec() > end.sim_time, 30, "a newer /odom")
     o = seen.get("/odom").pose.pose.position
-    assert abs(o.x - end.x) < 0.1 and abs(o.y - end.y) < 0.05
+    assert abs(o.x - end.x) < 0.1
+    assert abs(o.y - end.y) < 0.05
 
 
 def test_collision_teleport_spawn_reset_and_mcp(seen: Latest, hal: HalProcess, node: DdsNode) -> None:
@@ -155,10 +160,12 @@ def test_collision_teleport_spawn_reset_and_mcp(seen: Latest, hal: HalProcess, n
     collisions = hal.stub(SIM + "collisions", rpc.RobonixPrimitiveSimCollisionsStub)
     # into the coffee table (centre (2.5, 2.0), 1.0 x 0.6): refused, naming it
     r = teleport.Teleport(sim_pb2.Teleport_Request(x=2.5, y=2.0, theta=0.0), timeout=30)
-    assert not r.ok and "coffee_table" in r.detail
+    assert not r.ok
+    assert "coffee_table" in r.detail
     with pytest.raises(grpc.RpcError) as exc:
         teleport.Teleport(sim_pb2.Teleport_Request(x=float("nan"), y=2.0), timeout=30)
-    assert exc.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "x:" in exc.value.details()
+    assert exc.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "x:" in exc.value.details()
     # drive sideways (holonomic) into the table: a collision event, and no tunnelling through it
     assert teleport.Teleport(sim_pb2.Teleport_Request(x=2.5, y=3.0, theta=0.0), timeout=30).ok
     t0 = gt(hal).sim_time
@@ -178,7 +185,8 @@ def test_collision_teleport_spawn_reset_and_mcp(seen: Latest, hal: HalProcess, n
     with pytest.raises(grpc.RpcError) as exc:
         spawn.SpawnObstacle(sim_pb2.SpawnObstacle_Request(name="bad", x=4.0, y=4.0, size_x=0.0, size_y=0.4),
                             timeout=30)
-    assert exc.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "size_x" in exc.value.details()
+    assert exc.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "size_x" in exc.value.details()
     r = spawn.SpawnObstacle(sim_pb2.SpawnObstacle_Request(name="crate", x=4.0, y=4.0, size_x=0.4, size_y=0.4),
                             timeout=30)
     assert r.ok, r.detail
@@ -189,7 +197,8 @@ def test_collision_teleport_spawn_reset_and_mcp(seen: Latest, hal: HalProcess, n
     reset = hal.stub(SIM + "reset", rpc.RobonixPrimitiveSimResetStub)
     assert reset.ResetSim(sim_pb2.ResetSim_Request(), timeout=30).ok
     g = gt(hal)
-    assert (round(g.x, 6), round(g.y, 6)) == (2.5, 4.0) and g.sim_time >= t_spawn  # time stays monotonic
+    assert (round(g.x, 6), round(g.y, 6)) == (2.5, 4.0)
+    assert g.sim_time >= t_spawn
     assert collisions.GetCollisions(sim_pb2.GetCollisions_Request(), timeout=30).count == 0
     info = hal.stub(SIM + "scene_info", rpc.RobonixPrimitiveSimSceneInfoStub).GetSceneInfo(
         sim_pb2.GetSceneInfo_Request(), timeout=30)
@@ -226,7 +235,8 @@ def test_deactivate_holds_then_reactivates(seen: Latest, hal: HalProcess, node: 
         time.sleep(0.05)
     pub.close()
     b = gt(hal)
-    assert b.sim_time == a.sim_time and b.x == a.x  # sim time frozen, base held
+    assert b.sim_time == a.sim_time
+    assert b.x == a.x
     n = seen.counts.get("/odom", 0)
     wait_until(lambda: seen.counts.get("/odom", 0) > n, 30, "held /odom republished")
     assert hal.activate() == (True, "active", "")

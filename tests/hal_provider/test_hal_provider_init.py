@@ -51,10 +51,14 @@ def test_bad_inits_then_good_init_in_one_process(hal_factory) -> None:  # type: 
                                  "real_time_factor": 0})
     assert (ok, state, error) == (True, "inactive", "")
     resp = gt.GetGroundTruth(sim_pb2.GetGroundTruth_Request(), timeout=30)
-    assert resp.ok and abs(resp.x - 2.5) < 1e-6 and abs(resp.theta - 0.5) < 1e-6 and resp.sim_time == 0.0
+    assert resp.ok
+    assert abs(resp.x - 2.5) < 1e-6
+    assert abs(resp.theta - 0.5) < 1e-6
+    assert resp.sim_time == 0.0
     info = hal.stub("robonix/primitive/sim/scene_info", robonix_contracts_pb2_grpc.RobonixPrimitiveSimSceneInfoStub)
     data = json.loads(info.GetSceneInfo(sim_pb2.GetSceneInfo_Request(), timeout=30).info_json)
-    assert data["name"] == "apartment" and data["mode"] == "held"
+    assert data["name"] == "apartment"
+    assert data["mode"] == "held"
 
     # rtf 0 runs as fast as it can once active; a re-INIT with a changed topic is refused by field.
     assert hal.activate()[:2] == (True, "active")
@@ -65,6 +69,7 @@ def test_bad_inits_then_good_init_in_one_process(hal_factory) -> None:  # type: 
                "sim time to pass 5 s at rtf 0")
     assert hal.deactivate()[:2] == (True, "inactive")
     ok, state, error = hal.init({"topics": {"odom": "/other_odom"}})
-    assert not ok and "topics.odom" in error
+    assert not ok
+    assert "topics.odom" in error
     assert hal.init({"scene": "office"})[:2] == (True, "inactive")
     assert hal.stop() == 0

@@ -66,7 +66,7 @@ class Host(SessionHost[dict, Work]):
         work.active = False
 
 
-@pytest.fixture()
+@pytest.fixture
 def host() -> Host:
     return Host(Service("hosting_test", "robonix/service/test"))
 
@@ -77,12 +77,17 @@ def drive(h: Host, command: int, cfg: dict | None = None) -> tuple[bool, str, st
 
 
 def test_init_deferred_then_ok_exposes_the_session(host: Host) -> None:
-    assert host.current() is None and host.not_ready == "waiting for CMD_INIT"
+    assert host.current() is None
+    assert host.not_ready == "waiting for CMD_INIT"
     assert drive(host, CMD_INIT, {"defer": "waiting for robonix/x"}) == (False, "deferred", "waiting for robonix/x")
-    assert host.current() is None and host.not_ready == "waiting for robonix/x"
+    assert host.current() is None
+    assert host.not_ready == "waiting for robonix/x"
     assert drive(host, CMD_INIT, {"name": "a"})[:2] == (True, "inactive")
     s = host.current()
-    assert isinstance(s, Session) and s.work.name == "a" and s.setup == {"name": "a"} and host.not_ready == ""
+    assert isinstance(s, Session)
+    assert s.work.name == "a"
+    assert s.setup == {"name": "a"}
+    assert host.not_ready == ""
     assert host.events == []
 
 
@@ -90,33 +95,40 @@ def test_failed_reinit_keeps_the_running_session(host: Host) -> None:
     drive(host, CMD_INIT, {"name": "a"})
     first = host.current()
     assert drive(host, CMD_INIT, {"bad": "rate: must be > 0"}) == (False, "error", "rate: must be > 0")
-    assert host.current() is first and host.events == []
+    assert host.current() is first
+    assert host.events == []
     assert drive(host, CMD_INIT, {"defer": "gone"})[1] == "deferred"
-    assert host.current() is first and host.events == []
+    assert host.current() is first
+    assert host.events == []
 
 
 def test_reinit_closes_the_old_session_work_first_then_resources_newest_first(host: Host) -> None:
     drive(host, CMD_INIT, {"name": "a"})
     assert drive(host, CMD_INIT, {"name": "b"})[:2] == (True, "inactive")
     assert host.events == ["close a: re-initialized", "close a.pub", "close a.sub"]
-    assert host.current() is not None and host.current().work.name == "b"
+    assert host.current() is not None
+    assert host.current().work.name == "b"
 
 
 def test_start_failure_closes_what_it_owned_and_says_why(host: Host) -> None:
     drive(host, CMD_INIT, {"name": "a"})
     assert drive(host, CMD_INIT, {"name": "b", "fail": "no /map within 5 s"}) == (False, "error", "no /map within 5 s")
     assert host.events == ["close a: re-initialized", "close a.pub", "close a.sub", "close b.sub"]
-    assert host.current() is None and host.not_ready == "last CMD_INIT failed: no /map within 5 s"
+    assert host.current() is None
+    assert host.not_ready == "last CMD_INIT failed: no /map within 5 s"
 
 
 def test_activate_deactivate_reach_the_work_and_shutdown_closes(host: Host) -> None:
     drive(host, CMD_INIT, {"name": "a"})
     work = host.current().work
-    assert drive(host, CMD_ACTIVATE)[:2] == (True, "active") and work.active
-    assert drive(host, CMD_DEACTIVATE)[:2] == (True, "inactive") and not work.active
+    assert drive(host, CMD_ACTIVATE)[:2] == (True, "active")
+    assert work.active
+    assert drive(host, CMD_DEACTIVATE)[:2] == (True, "inactive")
+    assert not work.active
     assert drive(host, CMD_SHUTDOWN)[:2] == (True, "terminated")
     assert host.events == ["close a: shutting down", "close a.pub", "close a.sub"]
-    assert host.current() is None and host.not_ready == "shut down"
+    assert host.current() is None
+    assert host.not_ready == "shut down"
 
 
 def test_a_failing_close_does_not_stop_the_rest(host: Host) -> None:
@@ -156,7 +168,8 @@ def test_field_errors_name_each_field() -> None:
     with pytest.raises(ValidationError) as exc:
         _Cfg.model_validate({"rate_hz": -1, "ratehz": 2})
     text = field_errors(exc.value)
-    assert text.startswith("rate_hz: Input should be greater than 0") and "; ratehz: " in text
+    assert text.startswith("rate_hz: Input should be greater than 0")
+    assert "; ratehz: " in text
     assert field_errors(exc.value, unknown_key="unknown key (misspelt?)").endswith("ratehz: unknown key (misspelt?)")
 
 
@@ -167,4 +180,5 @@ def test_require_finite_names_the_field() -> None:
     require_finite(Req(), "x")
     with pytest.raises(StatusError) as exc:
         require_finite(Req(), "x", "y")
-    assert exc.value.code == grpc.StatusCode.INVALID_ARGUMENT and "y: must be a finite number" in str(exc.value)
+    assert exc.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "y: must be a finite number" in str(exc.value)

@@ -25,10 +25,14 @@ def test_demo_recording_replays_into_a_fresh_slam_with_the_same_map_and_trajecto
                        cwd=tmp_path, capture_output=True, text=True, timeout=400, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     summary = json.loads((demo / "summary.json").read_text())
-    assert summary["recording"] == str(demo / "run.mcap") and not summary["leftover_processes"]
+    assert summary["recording"] == str(demo / "run.mcap")
+    assert not summary["leftover_processes"]
 
     live = load_run(demo / "run.mcap")
-    assert live.grid_msg is not None and len(live.gt) > 50 and live.map_odom and live.odom_base
+    assert live.grid_msg is not None
+    assert len(live.gt) > 50
+    assert live.map_odom
+    assert live.odom_base
 
     # The demo ran the sim at 3x: replay at 1/3 of the recording's pace, i.e. 1x sim time, so the fresh SLAM
     # keeps up with the scans on a loaded machine (at 3x it dropped scans behind and drifted by 1.5 cm).

@@ -43,7 +43,9 @@ def _follow(grid, start, goal, steps=1200, dt=0.05):
         if gc.is_goal_reached((x, y, th), goal):
             return (x, y, th), True
         out = ctrl.compute((x, y, th), vel, goal, cm, dt, gc.xy_reached((x, y, th), goal))
-        assert abs(out.vx) <= 0.5 + 1e-9 and abs(out.vy) <= 0.5 + 1e-9 and abs(out.wz) <= 1.9 + 1e-9
+        assert abs(out.vx) <= 0.5 + 1e-9
+        assert abs(out.vy) <= 0.5 + 1e-9
+        assert abs(out.wz) <= 1.9 + 1e-9
         assert abs(out.vx - vel[0]) <= 1.5 * dt + 1e-9 or out.blocked       # acceleration limit
         c, s = math.cos(th), math.sin(th)
         x, y, th = x + (c * out.vx - s * out.vy) * dt, y + (s * out.vx + c * out.vy) * dt, th + out.wz * dt
@@ -77,7 +79,8 @@ def test_controller_stops_before_an_obstacle():
     ctrl = HolonomicController(ControllerConfig(footprint=FP))
     ctrl.set_path(np.stack([np.linspace(1.5, 5.0, 80), np.full(80, 2.0)], axis=1))   # path straight through it
     out = ctrl.compute((2.05, 2.0, 0.0), (0.5, 0.0, 0.0), (5.0, 2.0, 0.0), cm, 0.05)
-    assert out.blocked and (out.vx, out.vy) == (0.0, 0.0)
+    assert out.blocked
+    assert (out.vx, out.vy) == (0.0, 0.0)
 
 
 def test_goal_checker_tolerances_and_stateful_latch():
@@ -91,7 +94,8 @@ def test_goal_checker_tolerances_and_stateful_latch():
 
 def test_progress_checker_nav2_defaults():
     pc = ProgressChecker()
-    assert pc.cfg.required_movement_radius == 0.5 and pc.cfg.movement_time_allowance == 10.0
+    assert pc.cfg.required_movement_radius == 0.5
+    assert pc.cfg.movement_time_allowance == 10.0
     assert pc.check(0.0, (0.0, 0.0, 0.0))
     assert pc.check(9.9, (0.4, 0.0, 0.0))
     assert not pc.check(10.1, (0.4, 0.0, 0.0))
@@ -119,15 +123,18 @@ def test_recovery_order_budget_and_commands():
             if beh.name == "wait":
                 assert (s.vx, s.vy, s.wz) == (0.0, 0.0, 0.0)
             if beh.name == "spin":
-                assert s.wz > 0 and s.vx == 0.0
+                assert s.wz > 0
+                assert s.vx == 0.0
             if beh.name == "backup":
-                assert s.vx < 0 and s.wz == 0.0
+                assert s.vx < 0
+                assert s.wz == 0.0
             pose[0] += math.cos(pose[2]) * s.vx * 0.1
             pose[1] += math.sin(pose[2]) * s.vx * 0.1
             pose[2] += s.wz * 0.1
             t += 0.1
     assert names == ["clear_costmaps", "spin", "wait", "backup", "clear_costmaps"]
-    assert seq.exhausted and len(cleared) == 2
+    assert seq.exhausted
+    assert len(cleared) == 2
 
 
 def test_spin_refuses_when_it_would_collide():
@@ -137,4 +144,6 @@ def test_spin_refuses_when_it_would_collide():
     seq = RecoverySequence(RecoveryConfig(behaviors=("spin",)), lambda: None)
     seq.begin(0.0, (2.97, 3.0, 0.0))
     s = seq.step(0.0, (2.97, 3.0, 0.0), cm, HolonomicController(ControllerConfig(footprint=FP)))
-    assert s.done and not s.ok and "collide" in s.detail
+    assert s.done
+    assert not s.ok
+    assert "collide" in s.detail

@@ -113,4 +113,5 @@ def test_rolling_window_follows_robot_and_keeps_marks():
     assert cm.cost_at(1.01, 0.01) == LETHAL
     cm.update_origin(0.5, 0.3)
     assert cm.cost_at(1.01, 0.01) == LETHAL
-    assert cm.origin_x == pytest.approx(-1.0) and cm.origin_y == pytest.approx(-1.2)
+    assert cm.origin_x == pytest.approx(-1.0)
+    assert cm.origin_y == pytest.approx(-1.2)

@@ -21,12 +21,14 @@ WORLD = room(10, 8, boxes=((3, 0, 3.5, 5), (6.5, 3, 7, 8)))
 def test_reaches_goal_without_collision():
     n = nav()
     rec = n.navigate(9.0, 1.0, math.pi / 2, 0.0)
-    assert rec.accepted and rec.state == "PENDING"
+    assert rec.accepted
+    assert rec.state == "PENDING"
     run = drive(n, WORLD, (1.0, 1.0, 0.0), 120.0)
     assert run.cmds[-1].state == "SUCCEEDED", run.cmds[-1].detail
     assert not run.collided
     x, y, th = run.poses[-1]
-    assert math.hypot(x - 9.0, y - 1.0) <= 0.25 + 0.02 and abs(th - math.pi / 2) <= 0.25 + 0.05
+    assert math.hypot(x - 9.0, y - 1.0) <= 0.25 + 0.02
+    assert abs(th - math.pi / 2) <= 0.25 + 0.05
     running = [c.detail for c in run.cmds if c.state == "RUNNING"]
     assert "m remaining, ETA" in running[len(running) // 2]
     assert n.tick(run.t, run.poses[-1]).vx == 0.0
@@ -42,13 +44,15 @@ def test_unreachable_goal_fails_with_reason():
     assert (run.cmds[-1].vx, run.cmds[-1].vy, run.cmds[-1].wz) == (0.0, 0.0, 0.0)
 
 
-@pytest.mark.parametrize("goal, why", [((3.2, 2.0), "inside an obstacle"), ((30.0, 2.0), "off the map"),
+@pytest.mark.parametrize(("goal", "why"), [((3.2, 2.0), "inside an obstacle"), ((30.0, 2.0), "off the map"),
                                         ((float("nan"), 2.0), "non-finite")])
 def test_invalid_goals_are_rejected(goal, why):
     n = nav()
     n.tick(0.0, (1.0, 1.0, 0.0), grid=WORLD)
     rec = n.navigate(goal[0], goal[1], 0.0, 0.1)
-    assert not rec.accepted and rec.state == "FAILED" and why in rec.detail
+    assert not rec.accepted
+    assert rec.state == "FAILED"
+    assert why in rec.detail
     assert n.status(rec.run_id) is rec
 
 
@@ -56,10 +60,12 @@ def test_cancel_stops_with_zero_command():
     n = nav()
     rec = n.navigate(9.0, 1.0, 0.0, 0.0)
     run = drive(n, WORLD, (1.0, 1.0, 0.0), 3.0)
-    assert run.cmds[-1].state == "RUNNING" and math.hypot(run.cmds[-1].vx, run.cmds[-1].vy) > 0.05
+    assert run.cmds[-1].state == "RUNNING"
+    assert math.hypot(run.cmds[-1].vx, run.cmds[-1].vy) > 0.05
     n.cancel(3.0)
     cmd = n.tick(3.05, run.poses[-1], (0.3, 0.0, 0.0))
-    assert (cmd.vx, cmd.vy, cmd.wz) == (0.0, 0.0, 0.0) and cmd.state == "CANCELED"
+    assert (cmd.vx, cmd.vy, cmd.wz) == (0.0, 0.0, 0.0)
+    assert cmd.state == "CANCELED"
     assert n.status(rec.run_id).state == "CANCELED"
 
 
@@ -68,9 +74,11 @@ def test_preempt_cancels_old_goal():
     old = n.navigate(9.0, 1.0, 0.0, 0.0)
     run = drive(n, WORLD, (1.0, 1.0, 0.0), 2.0)
     new = n.navigate(1.5, 6.0, 0.0, 2.0)
-    assert old.state == "CANCELED" and "preempted" in old.detail
+    assert old.state == "CANCELED"
+    assert "preempted" in old.detail
     run2 = drive(n, WORLD, run.poses[-1], 60.0, t0=2.0)
-    assert run2.cmds[-1].state == "SUCCEEDED" and run2.cmds[-1].run_id == new.run_id
+    assert run2.cmds[-1].state == "SUCCEEDED"
+    assert run2.cmds[-1].run_id == new.run_id
     assert not run2.collided
 
 

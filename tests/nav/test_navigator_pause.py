@@ -19,12 +19,17 @@ def test_grace_pauses_then_resumes_when_the_input_returns():
     g = InputGrace(5.0)
     assert g.update(0.0, 100.0, {}) == g.update(0.1, 100.1, {})  # nothing lost: OK, no resume
     v = g.update(1.0, 101.0, LOST)
-    assert v.state == PAUSED and v.detail.startswith("waiting for mapping (TF map→odom")
-    assert "fails in 5.0 s" in v.detail and g.paused
+    assert v.state == PAUSED
+    assert v.detail.startswith("waiting for mapping (TF map→odom")
+    assert "fails in 5.0 s" in v.detail
+    assert g.paused
     v = g.update(4.0, 104.0, LOST)
-    assert v.state == PAUSED and "fails in 2.0 s" in v.detail
+    assert v.state == PAUSED
+    assert "fails in 2.0 s" in v.detail
     v = g.update(4.5, 104.5, {})
-    assert v.state == OK and v.resumed and not g.paused
+    assert v.state == OK
+    assert v.resumed
+    assert not g.paused
     assert not g.update(4.6, 104.6, {}).resumed
 
 
@@ -43,7 +48,8 @@ def test_grace_counts_each_input_from_its_own_loss():
     g = InputGrace(2.0)
     g.update(0.0, 0.0, {"mapping": "a"})
     v = g.update(1.5, 1.5, {"mapping": "a", "panda_mobile": "b"})
-    assert v.state == PAUSED and v.detail.startswith("waiting for mapping, panda_mobile (mapping: a; panda_mobile: b)")
+    assert v.state == PAUSED
+    assert v.detail.startswith("waiting for mapping, panda_mobile (mapping: a; panda_mobile: b)")
     v = g.update(2.5, 2.5, {"panda_mobile": "b"})       # mapping back; panda_mobile only 1 s lost
     assert v.state == PAUSED
     assert g.update(3.6, 3.6, {"panda_mobile": "b"}).detail.startswith("panda_mobile lost: b")
@@ -53,15 +59,18 @@ def test_navigator_pause_holds_the_goal_and_resume_finishes_it():
     n = Navigator(load_params("sim").config)
     rec = n.navigate(9.0, 1.0, math.pi / 2, 0.0)
     run = drive(n, WORLD, (1.0, 1.0, 0.0), 4.0)
-    assert run.cmds[-1].state == "RUNNING" and math.hypot(run.cmds[-1].vx, run.cmds[-1].vy) > 0.05
+    assert run.cmds[-1].state == "RUNNING"
+    assert math.hypot(run.cmds[-1].vx, run.cmds[-1].vy) > 0.05
     pose = run.poses[-1]
     n.pause("waiting for mapping (test)")
     # paused for 12 s of sim time: longer than the progress checker's window, and every command is zero
     for k in range(240):
         cmd = n.tick(run.t + k * 0.05, pose)
         assert (cmd.vx, cmd.vy, cmd.wz) == (0.0, 0.0, 0.0)
-        assert cmd.state == "RUNNING" and cmd.detail == "waiting for mapping (test)"
-    assert rec.state == "RUNNING" and n.paused
+        assert cmd.state == "RUNNING"
+        assert cmd.detail == "waiting for mapping (test)"
+    assert rec.state == "RUNNING"
+    assert n.paused
     n.resume()
     rest = drive(n, WORLD, pose, 120.0, t0=run.t + 12.0)
     assert rest.cmds[-1].state == "SUCCEEDED", rest.cmds[-1].detail

@@ -35,14 +35,15 @@ def noisy(std: float, dropout: float, seed: int = 0):
 DOORWAY = room(10, 8, boxes=((0, 4.95, 8.05, 5.05), (9.15, 4.95, 10, 5.05), (8.95, 4.95, 9.05, 8)))
 
 
-@pytest.mark.parametrize("std, dropout, seed", [(0.02, 0.02, 0), (0.03, 0.05, 0), (0.03, 0.05, 1)])
+@pytest.mark.parametrize(("std", "dropout", "seed"), [(0.02, 0.02, 0), (0.03, 0.05, 0), (0.03, 0.05, 1)])
 def test_noisy_lidar_through_a_doorway(std: float, dropout: float, seed: int) -> None:
     n = Navigator(load_params("sim").config)
     n.navigate(7.0, 6.5, 0.0, 0.0)
     run = drive(n, DOORWAY, (7.0, 1.5, 0.0), 90.0, scan_fn=noisy(std, dropout, seed))
     assert run.cmds[-1].state == "SUCCEEDED", run.cmds[-1].detail
     assert not run.collided
-    assert n.active is not None and n.active.recoveries == 0
+    assert n.active is not None
+    assert n.active.recoveries == 0
 
 
 def corridor_with_box(gap: float) -> tuple:

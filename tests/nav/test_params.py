@@ -12,7 +12,8 @@ def test_profiles_validate_without_warnings(profile):
     assert lp.warnings == []
     assert lp.topics == {"map": "/robonix/map", "odom": "/odom2", "scan": "/scan_f"}
     cfg = lp.config
-    assert cfg.global_costmap.static_layer and cfg.global_costmap.inflation_layer
+    assert cfg.global_costmap.static_layer
+    assert cfg.global_costmap.inflation_layer
     assert cfg.global_costmap.footprint.inscribed_radius == pytest.approx(0.25)
     assert cfg.local_costmap.rolling_window
     assert cfg.progress_checker.required_movement_radius == 0.5
@@ -20,8 +21,11 @@ def test_profiles_validate_without_warnings(profile):
 
 def test_profile_meanings():
     sim, slam, dflt = (load_params(p).config for p in ("sim", "slam", "default"))
-    assert sim.planner.allow_unknown and not slam.planner.allow_unknown and not dflt.planner.allow_unknown
-    assert sim.goal_checker.xy_goal_tolerance == 0.25 and sim.navigator.controller_frequency == 20.0
+    assert sim.planner.allow_unknown
+    assert not slam.planner.allow_unknown
+    assert not dflt.planner.allow_unknown
+    assert sim.goal_checker.xy_goal_tolerance == 0.25
+    assert sim.navigator.controller_frequency == 20.0
     assert slam.controller.max_vel_x < sim.controller.max_vel_x
     assert slam.goal_checker.xy_goal_tolerance > sim.goal_checker.xy_goal_tolerance
     assert sim.navigator.global_frame == "map"
@@ -49,7 +53,8 @@ def test_unused_parameter_and_unselected_plugin_warn():
     lp = load_params("sim", text=text)
     joined = "\n".join(lp.warnings)
     assert "planner_server.ros__parameters.GridBased.use_astar" in joined
-    assert "controller_server.ros__parameters.DWB.max_vel_x" in joined and "unselected" in joined
+    assert "controller_server.ros__parameters.DWB.max_vel_x" in joined
+    assert "unselected" in joined
 
 
 def test_bad_values_and_plugins_are_errors():

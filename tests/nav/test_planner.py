@@ -34,7 +34,8 @@ def test_open_space_is_straight_and_short():
     r = GlobalPlanner().plan(cm, (1.0, 3.0), (9.0, 3.0))
     assert r.ok, r.reason
     assert r.length == pytest.approx(8.0, rel=0.01)
-    assert np.allclose(r.path[0], (1.0, 3.0)) and np.allclose(r.path[-1], (9.0, 3.0))
+    assert np.allclose(r.path[0], (1.0, 3.0))
+    assert np.allclose(r.path[-1], (9.0, 3.0))
     assert np.max(np.hypot(*np.diff(r.path, axis=0).T)) <= 0.05 + 1e-9
 
 
@@ -44,7 +45,8 @@ def test_goes_around_a_wall_close_to_optimal():
     cm = costmap(g)
     fast = GlobalPlanner(PlannerConfig(heuristic_weight=1.1)).plan(cm, (2.0, 2.0), (8.0, 2.0))
     exact = GlobalPlanner(PlannerConfig(heuristic_weight=1.0, smooth_path=False)).plan(cm, (2.0, 2.0), (8.0, 2.0))
-    assert fast.ok and exact.ok
+    assert fast.ok
+    assert exact.ok
     assert fast.cost <= exact.cost * 1.1 + 1e-6
     assert fast.length <= exact.length * 1.02
     assert np.max(fast.path[:, 1]) > 4.5            # went over the wall's end (y = 4.5)
@@ -78,7 +80,8 @@ def test_allow_unknown_on_and_off():
     cm = costmap(g)
     assert GlobalPlanner(PlannerConfig(allow_unknown=True)).plan(cm, (2.0, 3.0), (8.0, 3.0)).ok
     r = GlobalPlanner(PlannerConfig(allow_unknown=False)).plan(cm, (2.0, 3.0), (8.0, 3.0))
-    assert not r.ok and "no path" in r.reason
+    assert not r.ok
+    assert "no path" in r.reason
 
 
 def test_tolerance_picks_nearest_free_cell():
@@ -88,9 +91,11 @@ def test_tolerance_picks_nearest_free_cell():
     goal = (6.9, 3.0)                                 # 0.1 m from the box face: inscribed
     assert cm.cost_at(*goal) >= INSCRIBED
     ok = GlobalPlanner(PlannerConfig(tolerance=0.3)).plan(cm, (2.0, 3.0), goal)
-    assert ok.ok and math.hypot(*(ok.path[-1] - goal)) <= 0.3
+    assert ok.ok
+    assert math.hypot(*(ok.path[-1] - goal)) <= 0.3
     bad = GlobalPlanner(PlannerConfig(tolerance=0.05)).plan(cm, (2.0, 3.0), goal)
-    assert not bad.ok and "tolerance" in bad.reason
+    assert not bad.ok
+    assert "tolerance" in bad.reason
 
 
 def test_no_path_is_a_clear_failure():
@@ -100,9 +105,11 @@ def test_no_path_is_a_clear_failure():
     cm = costmap(g)
     r = GlobalPlanner().plan(cm, (2.0, 3.0), (7.0, 3.0))
     assert not r.ok
-    assert r.reason.startswith("no path") and "not reachable" in r.reason
+    assert r.reason.startswith("no path")
+    assert "not reachable" in r.reason
     off = GlobalPlanner().plan(cm, (2.0, 3.0), (70.0, 3.0))
-    assert not off.ok and "off the costmap" in off.reason
+    assert not off.ok
+    assert "off the costmap" in off.reason
 
 
 def test_start_inside_inscribed_band_escapes():

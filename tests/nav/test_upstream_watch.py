@@ -30,7 +30,8 @@ def test_upstream_watch_terminated_absent_and_reregistered_elsewhere() -> None:
 
             c.set_state("mapping", "terminated")
             terminated, rebinds = watch.poll()
-            assert terminated == {"map": "the atlas reports mapping TERMINATED"} and rebinds == {}
+            assert terminated == {"map": "the atlas reports mapping TERMINATED"}
+            assert rebinds == {}
 
             c.unregister("mapping")                       # gone from the atlas: not lost by itself
             assert watch.poll() == ({}, {})
@@ -38,7 +39,8 @@ def test_upstream_watch_terminated_absent_and_reregistered_elsewhere() -> None:
             _register(c, "mapping", MAP, "/map_restarted")  # a restarted provider, another topic
             terminated, rebinds = watch.poll()
             assert terminated == {}
-            assert rebinds["map"].topic == "/map_restarted" and rebinds["map"].provider_id == "mapping"
+            assert rebinds["map"].topic == "/map_restarted"
+            assert rebinds["map"].provider_id == "mapping"
             bindings["map"] = rebinds["map"]               # what Inputs.rebind does
             assert watch.poll() == ({}, {})
 
@@ -46,7 +48,9 @@ def test_upstream_watch_terminated_absent_and_reregistered_elsewhere() -> None:
             _register(c, "chassis", ODOM, "/odom")
             c.declare_capability("chassis", TWIST_IN, "ros2", "/chassis2/cmd_vel")
             terminated, rebinds = watch.poll()
-            assert set(rebinds) == {"cmd_vel"} and rebinds["cmd_vel"].topic == "/chassis2/cmd_vel"
-            assert rebinds["cmd_vel"].role == "cmd_vel" and rebinds["cmd_vel"].contract_id == TWIST_IN
+            assert set(rebinds) == {"cmd_vel"}
+            assert rebinds["cmd_vel"].topic == "/chassis2/cmd_vel"
+            assert rebinds["cmd_vel"].role == "cmd_vel"
+            assert rebinds["cmd_vel"].contract_id == TWIST_IN
     finally:
         server.stop()

@@ -96,7 +96,9 @@ def test_navigate_to_reachable_goal(system: System) -> None:
     assert math.hypot(g.x - KITCHEN[0], g.y - KITCHEN[1]) < 0.35, (g.x, g.y)
     assert abs(math.remainder(g.theta, 2 * math.pi)) < 0.35
     assert system.coll_stub.GetCollisions(sim_pb2.GetCollisions_Request(since_sim_time=t0), timeout=60).count == 0
-    assert plans and plans[0].header.frame_id == "map" and len(plans[0].poses) > 2
+    assert plans
+    assert plans[0].header.frame_id == "map"
+    assert len(plans[0].poses) > 2
     assert wait_until(lambda: system.speed() < 0.02, 30, "the base to rest")
 
 
@@ -112,7 +114,9 @@ def test_bad_goals_rejected_with_reason(system: System) -> None:
         r = system.navigate(**kwargs)
         assert not r.accepted and reason in r.detail, (kwargs, r.detail)
         s = system.status(r.run_id)
-        assert s.known and s.state == "FAILED" and reason in s.detail
+        assert s.known
+        assert s.state == "FAILED"
+        assert reason in s.detail
     # a goal in another TF frame connected to map (odom; identity here) is transformed, not rejected
     r = system.navigate(3.0, 4.0, frame="odom")
     assert r.accepted and "goal (3.00, 4.00" in r.detail, r.detail
@@ -130,9 +134,11 @@ def test_preempt_then_cancel_stops_the_base(system: System) -> None:
     assert first.accepted, first.detail
     system.wait_state(first.run_id, ("RUNNING",), 120)
     second = system.navigate(*LIVING)
-    assert second.accepted and f"preempted {first.run_id}" in second.detail
+    assert second.accepted
+    assert f"preempted {first.run_id}" in second.detail
     s = system.status(first.run_id)
-    assert s.state == "CANCELED" and f"preempted by {second.run_id}" in s.detail
+    assert s.state == "CANCELED"
+    assert f"preempted by {second.run_id}" in s.detail
     wait_until(lambda: system.status(second.run_id).state == "RUNNING" and system.speed() > 0.15, 120,
                "the second goal to drive the base", 0.1)
     c = system.cancel()
@@ -142,7 +148,8 @@ def test_preempt_then_cancel_stops_the_base(system: System) -> None:
     g = wait_until(lambda: (x := system.gt()).sim_time >= t_cancel + 0.5 and x, 60, "0.5 s of sim time", 0.02)
     assert math.hypot(g.vx, g.vy) < 0.03 and abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
     again = system.cancel(second.run_id)
-    assert not again.accepted and "already CANCELED" in again.detail
+    assert not again.accepted
+    assert "already CANCELED" in again.detail
 
 
 def test_speed_contracts(system: System) -> None:
@@ -151,20 +158,28 @@ def test_speed_contracts(system: System) -> None:
     set_ = nav.stub(NS + "set_speed_limit", rpc.RobonixServiceNavigationSetSpeedLimitStub)
     adjust = nav.stub(NS + "adjust_speed", rpc.RobonixServiceNavigationAdjustSpeedStub)
     g = get.GetNavigationSpeedLimit(nav_pb.GetNavigationSpeedLimit_Request(), timeout=60)
-    assert g.available and g.max_linear_speed_mps == pytest.approx(0.5) and g.effective_percentage == 100
+    assert g.available
+    assert g.max_linear_speed_mps == pytest.approx(0.5)
+    assert g.effective_percentage == 100
     r = set_.SetNavigationSpeedLimit(nav_pb.SetNavigationSpeedLimit_Request(percentage=50, persist=True), timeout=60)
-    assert r.accepted and r.changed and r.scope == "session"
+    assert r.accepted
+    assert r.changed
+    assert r.scope == "session"
     assert r.effective_linear_speed_mps == pytest.approx(0.25)
     r = adjust.AdjustNavigationSpeed(nav_pb.AdjustNavigationSpeed_Request(direction="slower", persist=True),
                                      timeout=60)
-    assert r.accepted and r.effective_percentage == pytest.approx(40)
+    assert r.accepted
+    assert r.effective_percentage == pytest.approx(40)
     r = set_.SetNavigationSpeedLimit(nav_pb.SetNavigationSpeedLimit_Request(percentage=5, persist=True), timeout=60)
-    assert not r.accepted and "percentage" in r.detail
+    assert not r.accepted
+    assert "percentage" in r.detail
     r = adjust.AdjustNavigationSpeed(nav_pb.AdjustNavigationSpeed_Request(direction="sideways"), timeout=60)
-    assert not r.accepted and "direction" in r.detail
+    assert not r.accepted
+    assert "direction" in r.detail
     r = adjust.AdjustNavigationSpeed(nav_pb.AdjustNavigationSpeed_Request(direction="normal", persist=True),
                                      timeout=60)
-    assert r.accepted and r.effective_percentage == 100
+    assert r.accepted
+    assert r.effective_percentage == 100
 
 
 def test_deactivate_rejects_goals(system: System) -> None:
@@ -212,9 +227,13 @@ def test_mcp_navigate_status_cancel(system: System) -> None:
     out = asyncio.run(asyncio.wait_for(talk(), 400))
     assert {"navigate", "status", "cancel", "adjust_speed", "set_speed_limit", "get_speed_limit"} <= out["tools"]
     assert out["first"]["state"] == "SUCCEEDED", out["first"]
-    assert out["running"] and out["running"]["goal"]["x"] == 3.5 and out["running"]["recoveries"] >= 0
-    assert out["cancel"]["accepted"] and out["after"]["state"] == "CANCELED"
-    assert out["unknown"]["known"] is False and out["unknown"]["state"] == "FAILED"
+    assert out["running"]
+    assert out["running"]["goal"]["x"] == 3.5
+    assert out["running"]["recoveries"] >= 0
+    assert out["cancel"]["accepted"]
+    assert out["after"]["state"] == "CANCELED"
+    assert out["unknown"]["known"] is False
+    assert out["unknown"]["state"] == "FAILED"
 
 
 def test_losing_the_chassis_fails_the_run(system: System) -> None:

@@ -39,7 +39,8 @@ def test_contracts_live_before_init(nav: Proc) -> None:
     assert not r.accepted and r.detail.startswith("not initialized"), r.detail
     status = nav.stub(NS + "navigate/status", rpc.RobonixServiceNavigationNavigateStatusStub)
     s = status.GetNavigationStatus(nav_pb.GetNavigationStatus_Request(), timeout=30)
-    assert (s.known, s.state) == (False, "FAILED") and "not initialized" in s.detail
+    assert (s.known, s.state) == (False, "FAILED")
+    assert "not initialized" in s.detail
     cancel = nav.stub(NS + "navigate/cancel", rpc.RobonixServiceNavigationNavigateCancelStub)
     assert not cancel.CancelNavigation(nav_pb.CancelNavigation_Request(), timeout=30).accepted
     speed = nav.stub(NS + "get_speed_limit", rpc.RobonixServiceNavigationGetSpeedLimitStub)
@@ -82,7 +83,8 @@ def test_init_deferred_until_upstream_appears(nav: Proc, procs) -> None:  # type
     assert "no /odom_nowhere received within 2 s" in err and "no /map received within 2 s" in err, err
     assert "no TF map→odom" in err, err
     r = navigate.Navigate(_goal(), timeout=30)
-    assert not r.accepted and "not initialized" in r.detail
+    assert not r.accepted
+    assert "not initialized" in r.detail
 
 
 def test_package_entry_point_serves_the_same_provider(procs) -> None:  # type: ignore[no-untyped-def]

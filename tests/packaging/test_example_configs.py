@@ -28,4 +28,5 @@ def test_example_entry_configs_parse(deploy: Path) -> None:
         parser = PARSERS[entry.manifest.package.name]
         parser(dict(entry.config or {}))  # raises naming the field on drift
         seen.add(entry.manifest.package.name)
-    assert "nav2_wrapper" in seen and "slam_service" in seen
+    assert "nav2_wrapper" in seen
+    assert "slam_service" in seen

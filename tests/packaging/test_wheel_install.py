@@ -77,4 +77,5 @@ def test_init_writes_examples_that_validate(fresh_venv: Path, tmp_path: Path) ->
     assert v.returncode == 0, v.stdout + v.stderr
     again = subprocess.run([rbnx, "init", "mine"], cwd=tmp_path, env=env, capture_output=True, text=True,
                            timeout=120)
-    assert again.returncode == 2 and "already exists" in again.stderr
+    assert again.returncode == 2
+    assert "already exists" in again.stderr

@@ -23,7 +23,8 @@ def state_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 def test_state_file_is_keyed_by_deploy_and_listen_address(state_dir: Path) -> None:
     deploy = Path("/x/deploy.yaml")
     a, b = state_path(deploy, "127.0.0.1:50061"), state_path(deploy, "127.0.0.1:50062")
-    assert a != b and a.parent == b.parent == state_dir
+    assert a != b
+    assert a.parent == b.parent == state_dir
     assert state_path(deploy, "127.0.0.1:50061", pid=7) == a  # a fixed port: one deployment, no PID
     p0, p1 = state_path(deploy, "127.0.0.1:0", pid=7), state_path(deploy, "127.0.0.1:0", pid=8)
     assert p0 != p1  # OS-picked ports: every boot is its own deployment
@@ -36,7 +37,8 @@ def test_state_file_is_keyed_by_deploy_and_listen_address(state_dir: Path) -> No
 def test_run_dir_is_keyed_by_deploy_name_and_atlas_address(tmp_path: Path) -> None:
     env = {"XDG_RUNTIME_DIR": str(tmp_path)}
     a, b = run_dir("sim", "127.0.0.1:50061", env), run_dir("sim", "127.0.0.1:50062", env)
-    assert a != b and a.parent == b.parent == tmp_path / "robonix"
+    assert a != b
+    assert a.parent == b.parent == tmp_path / "robonix"
     assert a.name == deployment_key("sim", "127.0.0.1:50061") == "sim-127.0.0.1_50061"
     assert run_dir("sim", "127.0.0.1:50061", {"RBNX_RUN_DIR": str(tmp_path / "r")}).parent == tmp_path / "r"
     assert "/" not in deployment_key("a/b c", "[::1]:5")

@@ -7,6 +7,7 @@ checked: util-linux ``setpriv`` and the Python exec shim used where setpriv is m
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -64,7 +65,5 @@ def test_child_gets_the_signal_when_its_parent_is_killed(tmp_path: Path, how: st
     finally:
         parent.kill()
         parent.wait(timeout=30)
-        try:
+        with contextlib.suppress(ProcessLookupError):
             os.kill(child_pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass

@@ -96,9 +96,11 @@ def test_boot_defers_retries_caps_and_sigint_leaves_nothing(tmp_path: Path, mini
 
         text = run(["--atlas", atlas, "caps", "-v"], env, tmp_path)
         assert "odom_primitive  [primitive]  active" in text.stdout
-        assert "robonix/primitive/chassis/odom" in text.stdout and "/odom" in text.stdout
+        assert "robonix/primitive/chassis/odom" in text.stdout
+        assert "/odom" in text.stdout
         desc = run(["--atlas", atlas, "describe", "--provider", "odom_consumer"], env, tmp_path)
-        assert desc.returncode == 0 and "Deferred" in desc.stdout  # CAPABILITY.md text is served
+        assert desc.returncode == 0
+        assert "Deferred" in desc.stdout
         assert run(["--atlas", atlas, "inspect"], env, tmp_path).returncode == 0
         assert run(["--atlas", atlas, "contracts", "--prefix", "robonix/primitive/chassis"],
                    env, tmp_path).stdout.count("robonix/primitive/chassis/") >= 2
@@ -160,7 +162,8 @@ def test_exit_after_boot_then_shutdown_from_state_file(tmp_path: Path, minimal: 
         assert SUMMARY in res.stdout
         assert all(alive(p) for p in pids[1:])
         again = run(["boot", "-f", str(deploy), "--no-progress"], env, tmp_path, timeout=60)
-        assert again.returncode == 1 and "already booted by a previous boot" in again.stderr
+        assert again.returncode == 1
+        assert "already booted by a previous boot" in again.stderr
     finally:
         down = run(["shutdown", "-f", str(deploy), "--term-timeout", "10"], env, tmp_path, timeout=240)
         assert down.returncode == 0, down.stderr
@@ -208,17 +211,21 @@ def test_malformed_deploy_exit_2_nothing_started(tmp_path: Path, minimal: tuple[
         f"{bad}: service[2]: exactly one of 'path' or 'url' must be set",
         f"{bad}: service[2].name: missing required key",
     ]
-    assert "Traceback" not in res.stderr and not (tmp_path / "logs").exists()
+    assert "Traceback" not in res.stderr
+    assert not (tmp_path / "logs").exists()
     bad.write_text("manifestVersion: 1\nname: bad\nservice:\n  - name: x\n    path: odom_consumer\n"
                    "  - name: x\n    path: nowhere\n")
     res = run(["boot", "-f", str(bad), "--log-dir", str(tmp_path / "logs")], env, tmp_path)
-    assert res.returncode == 2 and res.stderr.strip().splitlines() == [
+    assert res.returncode == 2
+    assert res.stderr.strip().splitlines() == [
         f"{bad}: service[1].name: duplicate name 'x' (first used by service[0])"]
     bad.write_text("name: [unclosed\n")
     res = run(["boot", "-f", str(bad)], env, tmp_path)
-    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert res.returncode == 2
+    assert len(res.stderr.strip().splitlines()) == 1
     assert res.stderr.startswith(f"{bad}:2:")
-    assert not (tmp_path / "logs").exists() and not (tmp_path / "state").exists()
+    assert not (tmp_path / "logs").exists()
+    assert not (tmp_path / "state").exists()
 
 
 def test_busy_atlas_port_fails_clearly(tmp_path: Path, minimal: tuple[Path, dict]) -> None:
@@ -240,7 +247,8 @@ def test_atlas_unreachable_is_one_line(tmp_path: Path) -> None:
         port = s.getsockname()[1]
     res = run(["--atlas", f"127.0.0.1:{port}", "caps"], make_env(tmp_path), tmp_path)
     assert res.returncode == 1
-    assert res.stderr.strip().count("\n") == 0 and "cannot reach" in res.stderr
+    assert res.stderr.strip().count("\n") == 0
+    assert "cannot reach" in res.stderr
 
 
 def test_sigint_while_deferred_stops_everything(tmp_path: Path) -> None:

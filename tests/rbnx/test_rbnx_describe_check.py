@@ -22,10 +22,12 @@ def test_describe_check_exit_codes() -> None:
             client.register_service("nav2", "robonix/service/navigation")
             client.set_state("nav2", LifecycleState.ACTIVE)
             ok = check(server.address, "nav2")
-            assert ok.returncode == 0 and ok.stdout.strip() == "nav2: active"
+            assert ok.returncode == 0
+            assert ok.stdout.strip() == "nav2: active"
             client.set_state("nav2", LifecycleState.TERMINATED, "heartbeat lapsed > 90000ms")
             dead = check(server.address, "nav2")
-            assert dead.returncode == 1 and "terminated" in dead.stdout
+            assert dead.returncode == 1
+            assert "terminated" in dead.stdout
             assert check(server.address, "ghost").returncode == 1
         finally:
             client.close()

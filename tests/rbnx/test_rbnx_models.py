@@ -92,7 +92,8 @@ def test_yaml_syntax_error_has_file_and_line(tmp_path: Path) -> None:
     d = write_deploy(tmp_path, "manifestVersion: 1\nname: x\nservice:\n  - name: a\n   path: [b\n")
     lines = problems(d)
     assert len(lines) == 1
-    assert lines[0].startswith(f"{d}:5:") and "YAML syntax error" in lines[0]
+    assert lines[0].startswith(f"{d}:5:")
+    assert "YAML syntax error" in lines[0]
 
 
 def test_empty_and_non_mapping(tmp_path: Path) -> None:
@@ -109,7 +110,8 @@ def test_env_applied_then_expanded(tmp_path: Path) -> None:
                                                "config": {"m": "${MAPS:-/tmp/maps}", "lit": "$$x"}}]})
     dep = load_deploy(d, base_env={"HOME_DIR": str(tmp_path)})
     assert dep.atlas_listen == "127.0.0.1:7000"
-    assert dep.env["PKGS"] == str(tmp_path) and dep.env["PORT"] == "7000"
+    assert dep.env["PKGS"] == str(tmp_path)
+    assert dep.env["PORT"] == "7000"
     assert dep.entries[0].root == (tmp_path / "a").resolve()
     assert dep.entries[0].config == {"m": "/tmp/maps", "lit": "$x"}
 
@@ -124,7 +126,9 @@ def test_url_needs_local_checkout(tmp_path: Path) -> None:
     d = write_deploy(tmp_path, {"manifestVersion": 1, "name": "x",
                                 "service": [{"name": "m", "url": "https://github.com/o/service-map-rbnx.git"}]})
     lines = problems(d)
-    assert len(lines) == 1 and "service[0].url: cannot fetch" in lines[0] and "service-map-rbnx" in lines[0]
+    assert len(lines) == 1
+    assert "service[0].url: cannot fetch" in lines[0]
+    assert "service-map-rbnx" in lines[0]
     write_pkg(tmp_path / "rbnx-packages", "service-map-rbnx")
     assert load_deploy(d, base_env={}).entries[0].root.name == "service-map-rbnx"
 
@@ -156,7 +160,8 @@ def test_unknown_deploy_keys_warn(tmp_path: Path) -> None:
 
 def test_package_manifest_rules(tmp_path: Path) -> None:
     pm = PackageManifest.model_validate({**PKG, "future_key": {"x": 1}, "capabilities": None})
-    assert pm.capabilities == [] and pm.stop is None
+    assert pm.capabilities == []
+    assert pm.stop is None
     root = write_pkg(tmp_path, "bad", {"start": " ", "manifestVersion": 0, "package": {"name": "bad"}})
     with pytest.raises(ManifestProblems) as ei:
         load_package(root)

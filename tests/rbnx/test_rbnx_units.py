@@ -51,8 +51,10 @@ def test_render_table_columns_and_truncation() -> None:
             Row("a", "primitive", "active", "", 10.0, 11.5), Row("b", "skill")]
     lines = render_table(rows, now=12.0, width=60)
     assert lines[0].split() == ["NAME", "KIND", "STATE", "TIME"]
-    assert lines[1].startswith("odom_consumer  service") and lines[1].endswith("2.0s")
-    assert "…" in lines[1] and all(len(line) <= 60 for line in lines)
+    assert lines[1].startswith("odom_consumer  service")
+    assert lines[1].endswith("2.0s")
+    assert "…" in lines[1]
+    assert all(len(line) <= 60 for line in lines)
     assert lines[2].split() == ["a", "primitive", "active", "1.5s"]
     assert lines[3].split() == ["b", "skill", "pending", "-"]
 
@@ -64,7 +66,8 @@ def test_plain_progress_prints_each_change_once() -> None:
     view.set("a", "starting")
     view.set("a", "deferred", "waiting for x")
     lines = buf.getvalue().splitlines()
-    assert len(lines) == 2 and lines[1].endswith("a (service): deferred(waiting for x)")
+    assert len(lines) == 2
+    assert lines[1].endswith("a (service): deferred(waiting for x)")
     assert plain_line(Row("a", "k", "active"), 3.0, 1.0) == "[   2.0s] a (k): active"
 
 
@@ -82,13 +85,15 @@ def test_disabled_progress_is_silent() -> None:
     buf = io.StringIO()
     view = ProgressView([Row("a", "service")], stream=buf, enabled=False)
     view.set("a", "failed", "x")
-    assert buf.getvalue() == "" and view.row("a").label() == "failed(x)"
+    assert buf.getvalue() == ""
+    assert view.row("a").label() == "failed(x)"
 
 
 def test_state_file_roundtrip(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("RBNX_STATE_DIR", str(tmp_path))
     p = state_path(tmp_path / "deploy.yaml")
-    assert p.parent == tmp_path and p.name.startswith("boot-deploy-")
+    assert p.parent == tmp_path
+    assert p.name.startswith("boot-deploy-")
     write_state(p, {"pid": 1}, copy_to=tmp_path / "copy.json")
     assert read_state(p) == {"pid": 1} == read_state(tmp_path / "copy.json")
     assert read_state(tmp_path / "none.json") is None
@@ -125,7 +130,8 @@ def test_stop_escalates_to_kill(tmp_path: Path) -> None:
 
 def test_hook_timeout_kills_group(tmp_path: Path) -> None:
     ok, how = run_hook("h", "sleep 30", tmp_path, os.environ, None, timeout=0.5)
-    assert not ok and how == "timed out after 0.5s"
+    assert not ok
+    assert how == "timed out after 0.5s"
     assert run_hook("h", "exit 3", tmp_path, os.environ, None, timeout=30) == (False, "exit code 3")
 
 

@@ -26,7 +26,8 @@ def test_broken_copies_rejected(tmp_path: Path) -> None:
                                        f"{pm}: start: missing required key"]
     assert "2 problems found" in res.stderr
     res = run(["validate", str(pm)], env, tmp_path)
-    assert res.returncode == 2 and len(res.stdout.splitlines()) == 2
+    assert res.returncode == 2
+    assert len(res.stdout.splitlines()) == 2
 
     d = root / "deploy.yaml"
     d.write_text(d.read_text().replace("name: odom_primitive", "name: odom_consumer"))
@@ -35,7 +36,8 @@ def test_broken_copies_rejected(tmp_path: Path) -> None:
     assert f"{d}: primitive[0].name: duplicate name 'odom_consumer' (first used by service[0])" in res.stdout
     (root / "junk.yaml").write_text("a: [1\n")
     res = run(["validate", str(root / "junk.yaml")], env, tmp_path)
-    assert res.returncode == 2 and res.stdout.startswith(f"{root / 'junk.yaml'}:2:")
+    assert res.returncode == 2
+    assert res.stdout.startswith(f"{root / 'junk.yaml'}:2:")
 
 
 def test_build_runs_hooks_and_stamps(tmp_path: Path) -> None:
@@ -43,8 +45,11 @@ def test_build_runs_hooks_and_stamps(tmp_path: Path) -> None:
     env = make_env(tmp_path)
     res = run(["build", "-f", str(root / "deploy.yaml")], env, tmp_path)
     assert res.returncode == 0, res.stdout + res.stderr
-    assert (root / "odom_primitive" / ".rbnx-built").exists() and (root / "odom_consumer" / ".rbnx-built").exists()
+    assert (root / "odom_primitive" / ".rbnx-built").exists()
+    assert (root / "odom_consumer" / ".rbnx-built").exists()
     pm = root / "odom_primitive" / "package_manifest.yaml"
     pm.write_text(pm.read_text().replace('build: "true"', 'build: test "$RBNX_BUILD_CLEAN" = 1 && exit 4'))
     res = run(["build", "-p", str(root / "odom_primitive"), "--clean"], env, tmp_path)
-    assert res.returncode == 1 and "FAILED" in res.stdout and "exit code 4" in res.stdout
+    assert res.returncode == 1
+    assert "FAILED" in res.stdout
+    assert "exit code 4" in res.stdout

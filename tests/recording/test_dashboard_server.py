@@ -39,7 +39,7 @@ def _post(url: str, body: bytes) -> tuple[int, dict[str, Any]]:
         return exc.code, json.loads(exc.read())
 
 
-@pytest.mark.parametrize("path, body, message", [
+@pytest.mark.parametrize(("path", "body", "message"), [
     ("api/goal", b"{}", "x: required"),
     ("api/goal", b'{"x": "a", "y": 1}', "x: must be a finite number"),
     ("api/goal", b"[1, 2]", "body: must be a JSON object"),
@@ -103,4 +103,5 @@ def test_websocket_pushes_the_tf_pose(dash: Any) -> None:
                 return snap["pose"]
 
             p = wait_until(pose, 30, "a pose in the pushed snapshot")
-    assert p["x"] == pytest.approx(1.5) and p["y"] == pytest.approx(0.25)
+    assert p["x"] == pytest.approx(1.5)
+    assert p["y"] == pytest.approx(0.25)

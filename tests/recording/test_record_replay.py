@@ -95,7 +95,8 @@ def test_recording_decodes_with_mcap_ros2_support_into_the_published_fields(tmp_
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         assert reader.get_header().profile == "ros2"
         for schema, channel, _msg, decoded in reader.iter_decoded_messages():
-            assert schema.encoding == "ros2msg" and channel.message_encoding == "cdr"
+            assert schema.encoding == "ros2msg"
+            assert channel.message_encoding == "cdr"
             got[channel.topic].append(decoded)
     assert {s.name for s in reader.get_summary().schemas.values()} == {
         "sensor_msgs/msg/LaserScan", "nav_msgs/msg/Odometry", "tf2_msgs/msg/TFMessage"}
@@ -150,7 +151,9 @@ def test_replay_republishes_with_remap_drop_tf_and_clock_from_a_ros2_db3_bag(tmp
         np.testing.assert_array_equal(m.ranges, _scan(i).ranges)
     assert all([t.child_frame_id for t in m.transforms] == ["base_link"] for m in got["/tf"])
     clocks = [c.clock.to_sec() for c in got["/clock"]]
-    assert clocks and clocks == sorted(clocks) and clocks[0] == pytest.approx(1000.0)
+    assert clocks
+    assert clocks == sorted(clocks)
+    assert clocks[0] == pytest.approx(1000.0)
 
 
 def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
@@ -160,7 +163,8 @@ def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
     with DdsNode(name="publisher") as node:
         clock = node.create_publisher("/clock", Clock, "best_effort")
         odom = node.create_publisher("/odom", Odometry, "reliable")
-        assert odom.wait_for_subscribers(1, 10.0) and clock.wait_for_subscribers(1, 10.0)
+        assert odom.wait_for_subscribers(1, 10.0)
+        assert clock.wait_for_subscribers(1, 10.0)
         for i in range(10):
             clock.publish(Clock(clock=Time.from_sec(10.0 + 0.02 * i)))
             odom.publish(_odom(i))
@@ -174,7 +178,8 @@ def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
         stats = Replayer(out, rate=2.0, loop=False, delay_s=1.5).run()
         wait_until(lambda: len(got) == 10, 20, lambda: f"{len(got)} odometry messages replayed")
     assert [m.pose.pose.position.y for m in got] == [_odom(i).pose.pose.position.y for i in range(10)]
-    assert stats.published["/odom"] == 10 and stats.published["/clock"] >= 1
+    assert stats.published["/odom"] == 10
+    assert stats.published["/clock"] >= 1
 
     stop = threading.Event()
     looping = Replayer(out, rate=20.0, loop=True, delay_s=0.0)
@@ -188,7 +193,7 @@ def test_replay_of_our_recording_round_trips_and_loops(tmp_path: Path) -> None:
     assert not t.is_alive()
 
 
-@pytest.mark.parametrize("argv, message", [
+@pytest.mark.parametrize(("argv", "message"), [
     (["record", "-o", "x.txt"], "must end in .mcap"),
     (["record", "-o", "run.mcap", "/foo", "--discovery-timeout", "0.5"], "/foo: no writer seen in 0.5 s"),
     (["record", "-o", "run.mcap", "/foo:nav_msgs/Nope"], "type 'nav_msgs/Nope'"),
@@ -210,7 +215,8 @@ def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, argv: list[str], mes
     r = subprocess.run([sys.executable, "-m", "rbnx.cli", *argv], cwd=tmp_path, capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 2, r.stderr
-    assert message in r.stderr and "Traceback" not in r.stderr
+    assert message in r.stderr
+    assert "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
 
 

@@ -68,7 +68,8 @@ def test_preload_time_loads_without_a_client() -> None:
     server = DeferredMcpServer("t", "127.0.0.1", Built, preload_s=0.05)
     server.start()
     assert server.wait_loaded(30)
-    assert built and built[0].getsockname()[1] == server.port
+    assert built
+    assert built[0].getsockname()[1] == server.port
     server.stop()
     assert built[0].fileno() == -1
 

@@ -56,7 +56,7 @@ def client(atlas_server) -> AtlasClient:  # type: ignore[no-untyped-def]
 def providers(atlas_server, short_heartbeat):  # type: ignore[no-untyped-def]
     made: list[Service] = []
 
-    def make(id: str = "sdk_p1") -> Service:  # noqa: A002
+    def make(id: str = "sdk_p1") -> Service:
         svc = Service(id, "robonix/test", atlas=atlas_server.address)
         made.append(svc)
         return svc
@@ -87,7 +87,8 @@ def test_driver_over_real_grpc_stub_and_raw_bytes(providers, client: AtlasClient
     svc.run_in_thread()
 
     rec = provider_record(client, "sdk_p1")
-    assert rec is not None and rec.state == LifecycleState.REGISTERED
+    assert rec is not None
+    assert rec.state == LifecycleState.REGISTERED
     endpoint = driver_endpoint(client, "sdk_p1")
     assert endpoint == svc.grpc_endpoint
 
@@ -96,7 +97,8 @@ def test_driver_over_real_grpc_stub_and_raw_bytes(providers, client: AtlasClient
     assert seen == [{"speed": 0.5}]
     wait_until(lambda: provider_record(client, "sdk_p1").state == LifecycleState.INACTIVE, what="INACTIVE")
     ok, state, error = generic_driver(endpoint, 9)  # unknown command: ERROR, as robonix's SDK does
-    assert (ok, state) == (False, "error") and "command" in error
+    assert (ok, state) == (False, "error")
+    assert "command" in error
     assert provider_record(client, "sdk_p1").state == LifecycleState.ERROR
     assert generic_driver(endpoint, 0, "{}") == (True, "inactive", "")
 
@@ -126,7 +128,8 @@ def test_invalid_config_and_deferred(providers, client: AtlasClient) -> None:  #
 
     assert generic_driver(endpoint, 0, "{}") == (False, "error", "lidar driver crashed")
     rec = provider_record(client, "sdk_p1")
-    assert rec.state == LifecycleState.ERROR and rec.state_detail == "lidar driver crashed"
+    assert rec.state == LifecycleState.ERROR
+    assert rec.state_detail == "lidar driver crashed"
 
 
 def test_grpc_contract_and_mcp_tool_through_atlas(providers, client: AtlasClient) -> None:  # type: ignore[no-untyped-def]
@@ -156,7 +159,8 @@ def test_grpc_contract_and_mcp_tool_through_atlas(providers, client: AtlasClient
     with client.connect_capability(consumer_id="test", provider_id="sdk_p1", contract_id=NAV,
                                    transport="mcp") as ch:
         url = ch.endpoint
-    assert url.startswith("http://127.0.0.1:") and url.endswith("/mcp/")
+    assert url.startswith("http://127.0.0.1:")
+    assert url.endswith("/mcp/")
 
     async def talk():  # type: ignore[no-untyped-def]
         async with Client(url) as mcp_client:
@@ -269,7 +273,8 @@ def test_subprocess_provider_teardown(tmp_path: Path, atlas_server, client: Atla
         else:
             assert generic_driver(endpoint, 3) == (True, "terminated", "")
         assert proc.wait(timeout=90) == 0
-        assert (tmp_path / "shutdown.ran").exists() and (tmp_path / "run.returned").exists()
+        assert (tmp_path / "shutdown.ran").exists()
+        assert (tmp_path / "run.returned").exists()
         assert provider_record(client, "sdk_sub").state == LifecycleState.TERMINATED
         wait_until(lambda: not _pid_alive(child_pid), what="spawned child gone")
     finally:

@@ -116,7 +116,8 @@ def test_sigkill_is_evicted_then_restart_reregisters(atlas: AtlasServer, spawn) 
         init_provider(client, "base_a")
         again = record(client, "base_a")
         assert again.state == LifecycleState.INACTIVE
-        assert again.registration_id and again.registration_id != first.registration_id
+        assert again.registration_id
+        assert again.registration_id != first.registration_id
         assert {c.contract_id for c in again.capabilities} >= {ODOM}
     finally:
         client.close()

@@ -46,9 +46,12 @@ def test_register_declare_and_drive(provider, fake_atlas: FakeAtlas) -> None:  #
 
     svc.run_in_thread()
     reg = fake_atlas.registrations[0]
-    assert reg["kind"] == Kind.PRIMITIVE and reg["id"] == "p1" and reg["namespace"] == "robonix/test"
+    assert reg["kind"] == Kind.PRIMITIVE
+    assert reg["id"] == "p1"
+    assert reg["namespace"] == "robonix/test"
     drv = fake_atlas.declared[("p1", DRIVER, Transport.GRPC)]
-    assert drv["endpoint"] == svc.grpc_endpoint and svc.grpc_endpoint.startswith("127.0.0.1:")
+    assert drv["endpoint"] == svc.grpc_endpoint
+    assert svc.grpc_endpoint.startswith("127.0.0.1:")
     assert drv["params"] == GrpcParams("robonix_contracts.proto", "RobonixLifecycleDriver", "Driver")
     nav = fake_atlas.declared[("p1", NAV, Transport.GRPC)]
     assert nav["params"] == GrpcParams("robonix_contracts.proto", "RobonixServiceNavigationNavigate", "Navigate")
@@ -98,12 +101,14 @@ def test_handler_errors_become_statuses(provider) -> None:  # type: ignore[no-un
         grpc.insecure_channel(svc.grpc_endpoint))
     with pytest.raises(grpc.RpcError) as ei:
         stub.Navigate(navigation_pb2.Navigate_Request(), timeout=30)
-    assert ei.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "frame_id" in ei.value.details()
+    assert ei.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "frame_id" in ei.value.details()
     req = navigation_pb2.Navigate_Request()
     req.goal.header.frame_id = "map"
     with pytest.raises(grpc.RpcError) as ei:
         stub.Navigate(req, timeout=30)
-    assert ei.value.code() == grpc.StatusCode.INTERNAL and "planner exploded" in ei.value.details()
+    assert ei.value.code() == grpc.StatusCode.INTERNAL
+    assert "planner exploded" in ei.value.details()
 
 
 def test_reregisters_when_atlas_forgets(provider, fake_atlas: FakeAtlas) -> None:  # type: ignore[no-untyped-def]
@@ -135,8 +140,10 @@ def test_identity_from_env_and_package(tmp_path: Path, monkeypatch, fake_atlas: 
     (tmp_path / "src").mkdir()
     monkeypatch.setenv("RBNX_INSTANCE_NAME", "from_env")
     svc = Service("in_code", "robonix/test", pkg_root=tmp_path, atlas=fake_atlas)
-    assert svc.id == "from_env" and svc.pkg_root == tmp_path
-    assert svc.capability_md == "# Test package\n" and svc.md_path == str(tmp_path / "CAPABILITY.md")
+    assert svc.id == "from_env"
+    assert svc.pkg_root == tmp_path
+    assert svc.capability_md == "# Test package\n"
+    assert svc.md_path == str(tmp_path / "CAPABILITY.md")
     from robonix_api.pkg import find_pkg_root
 
     assert find_pkg_root(tmp_path / "src" / "x.py") == tmp_path
@@ -184,8 +191,10 @@ def test_mcp_tool_over_streamable_http(provider, fake_atlas: FakeAtlas) -> None:
 
     svc.run_in_thread()
     decl = fake_atlas.declared[("p1", NAV, Transport.MCP)]
-    assert decl["endpoint"] == svc.mcp_url and svc.mcp_url.endswith("/mcp/")
-    assert isinstance(decl["params"], McpParams) and '"goal"' in decl["params"].input_schema_json
+    assert decl["endpoint"] == svc.mcp_url
+    assert svc.mcp_url.endswith("/mcp/")
+    assert isinstance(decl["params"], McpParams)
+    assert '"goal"' in decl["params"].input_schema_json
 
     async def talk() -> tuple:  # type: ignore[type-arg]
         async with Client(svc.mcp_url) as client:
@@ -196,7 +205,10 @@ def test_mcp_tool_over_streamable_http(provider, fake_atlas: FakeAtlas) -> None:
 
     tools, ok, bad = asyncio.run(asyncio.wait_for(talk(), 60))
     (tool,) = tools.tools
-    assert tool.name == "navigate" and tool.description == "Drive the robot to a goal pose."
+    assert tool.name == "navigate"
+    assert tool.description == "Drive the robot to a goal pose."
     assert tool.input_schema["properties"]["goal"]["type"] == "object"
-    assert not ok.is_error and ok.structured_content == {"accepted": True, "run_id": "r1", "detail": ""}
-    assert bad.is_error and "goall" in bad.content[0].text
+    assert not ok.is_error
+    assert ok.structured_content == {"accepted": True, "run_id": "r1", "detail": ""}
+    assert bad.is_error
+    assert "goall" in bad.content[0].text

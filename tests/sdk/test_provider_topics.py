@@ -23,7 +23,8 @@ def test_publisher_declared_and_emitted(fake_atlas: FakeAtlas, clean_env: None, 
     try:
         svc.create_publisher(ODOM, topic=topic, msg_type=dds.Twist, qos="reliable")
         decl = fake_atlas.declared[("topics_p", ODOM, Transport.ROS2)]
-        assert decl["endpoint"] == topic and decl["params"] == Ros2Params("reliable")
+        assert decl["endpoint"] == topic
+        assert decl["params"] == Ros2Params("reliable")
         got: list[object] = []
         seen = threading.Event()
         svc.create_subscription(ODOM, topic=topic, msg_type=dds.Twist, qos="reliable",

@@ -18,9 +18,12 @@ from robonix_api.driver import (
 
 
 def test_result_types() -> None:
-    assert Ok() == Ok() and bool(Ok())
-    assert Err("x").msg == "x" and not Err("x")
-    assert Deferred("later").reason == "later" and not Deferred("later")
+    assert Ok() == Ok()
+    assert bool(Ok())
+    assert Err("x").msg == "x"
+    assert not Err("x")
+    assert Deferred("later").reason == "later"
+    assert not Deferred("later")
     assert Err("a") != Err("b")
 
 
@@ -37,12 +40,14 @@ def test_full_cycle_replies_and_pushes() -> None:
                       deactivate=lambda: Ok(), shutdown=lambda: Ok())
     r = lc.handle(CMD_INIT, '{"rate": 5}')
     assert (r.ok, r.state, r.error) == (True, "inactive", "")
-    assert seen == [{"rate": 5}] and lc.config == {"rate": 5}
+    assert seen == [{"rate": 5}]
+    assert lc.config == {"rate": 5}
     assert lc.handle(CMD_ACTIVATE).state == "active"
     assert lc.handle(CMD_DEACTIVATE).state == "inactive"
     assert lc.handle(CMD_ACTIVATE).state == "active"
     r = lc.handle(CMD_SHUTDOWN)
-    assert (r.ok, r.state) == (True, "terminated") and lc.terminated.is_set()
+    assert (r.ok, r.state) == (True, "terminated")
+    assert lc.terminated.is_set()
     assert [s for s, _ in pushed] == ["inactive", "active", "inactive", "active", "terminated"]
 
 
@@ -57,9 +62,11 @@ def test_err_goes_to_error_and_init_can_retry() -> None:
     lc, pushed = make(init=lambda cfg: next(calls))
     r = lc.handle(CMD_INIT)
     assert (r.ok, r.state, r.error) == (False, "error", "no lidar")
-    assert lc.state == "error" and pushed[-1] == ("error", "no lidar")
+    assert lc.state == "error"
+    assert pushed[-1] == ("error", "no lidar")
     r = lc.handle(CMD_ACTIVATE)
-    assert not r.ok and "cannot activate" in r.error
+    assert not r.ok
+    assert "cannot activate" in r.error
     assert lc.handle(CMD_INIT).ok
 
 
@@ -77,13 +84,18 @@ def test_exception_and_bad_return_become_err() -> None:
 
     lc, _ = make(init=boom)
     r = lc.handle(CMD_INIT)
-    assert not r.ok and r.state == "error" and "disk full" in r.error
+    assert not r.ok
+    assert r.state == "error"
+    assert "disk full" in r.error
     lc, _ = make(init=lambda cfg: True)
     r = lc.handle(CMD_INIT)
-    assert not r.ok and r.state == "error" and "TypeError" in r.error and "bool" in r.error
+    assert not r.ok
+    assert r.state == "error"
+    assert "TypeError" in r.error
+    assert "bool" in r.error
 
 
-@pytest.mark.parametrize("text,expected", [("", {}), ("  ", {}), ("[1, 2]", {}), ("3", {}), ('{"a": 1}', {"a": 1})])
+@pytest.mark.parametrize(("text", "expected"), [("", {}), ("  ", {}), ("[1, 2]", {}), ("3", {}), ('{"a": 1}', {"a": 1})])
 def test_config_json_lenient(text: str, expected: dict) -> None:
     assert parse_config_json(text) == expected
 
@@ -94,7 +106,8 @@ def test_invalid_config_json_names_the_problem_and_keeps_state() -> None:
         lc.handle(CMD_INIT, '{"a": }')
     with pytest.raises(ValueError, match="config_json: nested too deeply"):
         lc.handle(CMD_INIT, "[" * 100_000 + "]" * 100_000)
-    assert lc.state == "registered" and pushed == []
+    assert lc.state == "registered"
+    assert pushed == []
 
 
 def test_illegal_transitions_and_unknown_command() -> None:
@@ -102,11 +115,17 @@ def test_illegal_transitions_and_unknown_command() -> None:
     r = lc.handle(CMD_ACTIVATE)
     assert (r.ok, r.state, r.error) == (False, "error", "cannot activate: not initialized (state registered)")
     r = lc.handle(CMD_DEACTIVATE)
-    assert not r.ok and "cannot deactivate" in r.error
-    assert lc.state == "registered" and pushed == []
+    assert not r.ok
+    assert "cannot deactivate" in r.error
+    assert lc.state == "registered"
+    assert pushed == []
     r = lc.handle(7)  # an unknown command moves the provider to ERROR, as robonix's SDK does
-    assert not r.ok and r.state == "error" and "command" in r.error and "7" in r.error
-    assert lc.state == "error" and pushed == [("error", r.error)]
+    assert not r.ok
+    assert r.state == "error"
+    assert "command" in r.error
+    assert "7" in r.error
+    assert lc.state == "error"
+    assert pushed == [("error", r.error)]
     lc.handle(CMD_INIT)
     lc.handle(CMD_ACTIVATE)
     assert "deactivate first" in lc.handle(CMD_INIT).error
@@ -120,11 +139,15 @@ def test_shutdown_err_still_terminates_and_signal_cannot_defer() -> None:
     lc, pushed = make(shutdown=lambda: Err("left a mess"))
     r = lc.handle(CMD_SHUTDOWN)
     assert (r.ok, r.state, r.error) == (False, "error", "left a mess")
-    assert lc.state == "terminated" and lc.terminated.is_set() and pushed[-1][0] == "terminated"
+    assert lc.state == "terminated"
+    assert lc.terminated.is_set()
+    assert pushed[-1][0] == "terminated"
     lc, _ = make(shutdown=lambda: Deferred("busy"))
-    assert lc.handle(CMD_SHUTDOWN).state == "deferred" and lc.state == "registered"
+    assert lc.handle(CMD_SHUTDOWN).state == "deferred"
+    assert lc.state == "registered"
     r = lc.shutdown("signal SIGTERM")
-    assert lc.state == "terminated" and "busy" in r.error
+    assert lc.state == "terminated"
+    assert "busy" in r.error
 
 
 def test_commands_are_serialized() -> None:

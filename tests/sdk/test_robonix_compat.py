@@ -52,9 +52,13 @@ GET_POSE = "robonix/service/map/get_pose"
 
 def test_result_types_have_robonix_fields() -> None:
     err = Err("lidar unplugged")
-    assert err.message == "lidar unplugged" and err.msg == "lidar unplugged"  # robonix name and ours
-    assert Err(message="a") == Err("a") == Err(msg="a") and not err
-    assert Deferred("later").reason == "later" and Ok() and isinstance(Ok(), Result.__args__)  # type: ignore[attr-defined]
+    assert err.message == "lidar unplugged"
+    assert err.msg == "lidar unplugged"
+    assert Err(message="a") == Err("a") == Err(msg="a")
+    assert not err
+    assert Deferred("later").reason == "later"
+    assert Ok()
+    assert isinstance(Ok(), Result.__args__)
     with pytest.raises(AttributeError):
         err.message = "x"  # type: ignore[misc]  (frozen, as robonix-api's)
 
@@ -62,13 +66,15 @@ def test_result_types_have_robonix_fields() -> None:
 def test_dataclasses_accept_robonix_positional_order() -> None:
     ours = Capability("p", Kind.SERVICE, GET_POSE, Transport.MCP, McpParams("{}"), "tool")
     theirs = Capability("p", Kind.SERVICE, GET_POSE, Transport.MCP, "tool", McpParams("{}"))
-    assert theirs == ours and Capability("p", Kind.SERVICE, GET_POSE, Transport.MCP, "tool").params is None
+    assert theirs == ours
+    assert Capability("p", Kind.SERVICE, GET_POSE, Transport.MCP, "tool").params is None
 
     closed: list[str] = []
     ch = Channel("lidar", LIDAR, Transport.ROS2, "/scan", "ch-1", Ros2Params("best_effort"), closed.append)
     assert (ch.provider_id, ch.contract_id, ch.transport, ch.endpoint, ch.channel_id) == (
         "lidar", LIDAR, Transport.ROS2, "/scan", "ch-1")
-    assert ch.params == Ros2Params("best_effort") and ch.qos_profile == "best_effort"
+    assert ch.params == Ros2Params("best_effort")
+    assert ch.qos_profile == "best_effort"
     with ch:
         pass
     ch.close()
@@ -77,14 +83,18 @@ def test_dataclasses_accept_robonix_positional_order() -> None:
 
     desc = ContractDescriptor(LIDAR, "1", Kind.PRIMITIVE, "topic_out", "sensor_msgs/msg/LaserScan", "", "x.toml",
                               "a lidar", (FieldSpec("header", "std_msgs/Header"),))
-    assert desc.description == "a lidar" and desc.msg_fields[0].name == "header"
+    assert desc.description == "a lidar"
+    assert desc.msg_fields[0].name == "header"
     assert CapabilityProvider("p", Kind.PRIMITIVE, "ns").state == LifecycleState.UNSPECIFIED
-    assert GrpcParams().proto_file == "robonix_contracts.proto" and McpParams().input_schema_json == "{}"
+    assert GrpcParams().proto_file == "robonix_contracts.proto"
+    assert McpParams().input_schema_json == "{}"
 
 
 def test_lifecycle_state_equals_its_name() -> None:
-    assert LifecycleState.ACTIVE == "active" and LifecycleState.ACTIVE != "inactive"
-    assert LifecycleState.ACTIVE == 3 and {LifecycleState.ACTIVE: 1}[3] == 1
+    assert LifecycleState.ACTIVE == "active"
+    assert LifecycleState.ACTIVE != "inactive"
+    assert LifecycleState.ACTIVE == 3
+    assert {LifecycleState.ACTIVE: 1}[3] == 1
 
 
 def test_transport_and_endpoint_in_either_order() -> None:
@@ -125,10 +135,13 @@ def test_atlas_robonix_calls_on_a_real_atlas(atlas_server) -> None:  # type: ign
         assert [c.id for c in atlas.list_contracts(namespace_prefix="robonix/service/map/get_")] == [
             GET_MODE, GET_POSE]
         hb = atlas.start_heartbeat("c_lidar", period_s=0.05)
-        assert isinstance(hb, threading.Thread) and hb.daemon and hb.is_alive()
+        assert isinstance(hb, threading.Thread)
+        assert hb.daemon
+        assert hb.is_alive()
         wait_until(lambda: hb.beats >= 2, 30, "two heartbeats")  # type: ignore[attr-defined]
         hb.stop()  # type: ignore[attr-defined]
-        assert atlas.unregister("c_skill") is True and atlas.unregister("c_skill") is False
+        assert atlas.unregister("c_skill") is True
+        assert atlas.unregister("c_skill") is False
     finally:
         atlas.close()
 
@@ -138,9 +151,14 @@ def test_atlas_swallows_errors_like_robonix_but_atlas_client_raises() -> None:
     dead.timeout = 2.0
     try:
         assert dead.heartbeat("x") is None
-        assert dead.unregister("x") is False and dead.disconnect_capability("c") is False
-        assert dead.query() == [] and dead.query_primitives() == [] and dead.find_capability(contract_id=LIDAR) == []
-        assert dead.list_contracts() == [] and dead.query_contract(LIDAR) is None and dead.inspect() == {}
+        assert dead.unregister("x") is False
+        assert dead.disconnect_capability("c") is False
+        assert dead.query() == []
+        assert dead.query_primitives() == []
+        assert dead.find_capability(contract_id=LIDAR) == []
+        assert dead.list_contracts() == []
+        assert dead.query_contract(LIDAR) is None
+        assert dead.inspect() == {}
         with pytest.raises(grpc.RpcError):  # registering, declaring and connecting raise in robonix-api too
             dead.register_service("x", "robonix/service/x")
         with pytest.raises(ValueError, match="no live provider"):
@@ -167,12 +185,14 @@ def test_ros_message_names_resolve_to_dds_classes() -> None:
     from robonix_api.ros import RosBackend, qos_and_depth, resolve_msg_type
 
     assert resolve_msg_type("LaserScan") is LaserScan is resolve_msg_type("sensor_msgs/msg/LaserScan")
-    assert resolve_msg_type("nav_msgs/Odometry") is Odometry and resolve_msg_type(Odometry) is Odometry
+    assert resolve_msg_type("nav_msgs/Odometry") is Odometry
+    assert resolve_msg_type(Odometry) is Odometry
     with pytest.raises(ImportError, match="PointCloud2"):
         resolve_msg_type("PointCloud2")
     with pytest.raises(ValueError, match="unrecognized"):
         resolve_msg_type("a/b/c/d")
-    assert qos_and_depth(5) == ("reliable", 5) and qos_and_depth("latched") == ("latched", None)
+    assert qos_and_depth(5) == ("reliable", 5)
+    assert qos_and_depth("latched") == ("latched", None)
     with pytest.raises(ValueError, match="unknown QoS preset"):
         qos_and_depth("fast")
     assert RosBackend.get() is RosBackend.get()
@@ -185,7 +205,8 @@ def test_provider_robonix_surface(tmp_path: Path, fake_atlas: FakeAtlas, clean_e
     with pytest.raises(ValueError, match="namespace must be non-empty"):
         Service("x", "/", atlas=fake_atlas)
     svc = Service("c1", "/robonix/service/map/", atlas=fake_atlas, pkg_root=tmp_path)
-    assert svc.namespace == "robonix/service/map" and svc.state == LifecycleState.REGISTERED
+    assert svc.namespace == "robonix/service/map"
+    assert svc.state == LifecycleState.REGISTERED
 
     @svc.on_init
     def init(cfg: dict) -> Ok:
@@ -210,7 +231,8 @@ def test_provider_robonix_surface(tmp_path: Path, fake_atlas: FakeAtlas, clean_e
     svc.bootstrap()
     try:
         svc.bootstrap()  # idempotent
-        assert svc.mcp_endpoint == svc.mcp_url and svc.mcp_endpoint.endswith("/mcp/")
+        assert svc.mcp_endpoint == svc.mcp_url
+        assert svc.mcp_endpoint.endswith("/mcp/")
         declared = fake_atlas.declared
         assert declared[("c1", GET_MODE, Transport.GRPC)]["description"] == "The mode, over gRPC."
         assert declared[("c1", GET_POSE, Transport.MCP)]["description"] == "Pose, as a tool."
@@ -218,7 +240,8 @@ def test_provider_robonix_surface(tmp_path: Path, fake_atlas: FakeAtlas, clean_e
         svc.create_publisher(contract_id=LIDAR, topic="/c1_scan", msg_type="LaserScan", qos=3,
                              description="scans")
         decl = declared[("c1", LIDAR, Transport.ROS2)]
-        assert decl["params"] == Ros2Params("reliable") and decl["description"] == "scans"
+        assert decl["params"] == Ros2Params("reliable")
+        assert decl["description"] == "scans"
         assert svc.declare_ros2_service("robonix/service/map/save_map", "/save_map") == "/save_map"
         assert declared[("c1", "robonix/service/map/save_map", Transport.ROS2)]["params"] == Ros2Params("")
         assert svc.declare_grpc("robonix/service/map/list_maps", "127.0.0.1:7", "Svc", "M") == "127.0.0.1:7"
@@ -226,7 +249,8 @@ def test_provider_robonix_surface(tmp_path: Path, fake_atlas: FakeAtlas, clean_e
             "robonix_contracts.proto", "Svc", "M")
         assert svc.resolve_host_ip("127.0.0.1") == "127.0.0.1"
         svc.stop()  # after bootstrap() (no run loop), stop() tears down itself
-        assert svc.wait(0) and fake_atlas.states[-1][1] == LifecycleState.TERMINATED
+        assert svc.wait(0)
+        assert fake_atlas.states[-1][1] == LifecycleState.TERMINATED
     finally:
         svc.stop()
 
@@ -303,7 +327,8 @@ def test_mcp_contract_on_the_official_mcp_server_and_use_mcp_app(fake_atlas: Fak
         """Pose as a tool."""
         return map_pb2.GetPose_Response(ok=True, x=2.5, frame_id="map")
 
-    assert get_pose._robonix_contract_id == GET_POSE and get_pose._robonix_input_cls is map_pb2.GetPose_Request  # type: ignore[attr-defined]
+    assert get_pose._robonix_contract_id == GET_POSE
+    assert get_pose._robonix_input_cls is map_pb2.GetPose_Request
     with pytest.raises(TypeError, match="exactly one parameter"):
         mcp_contract(app, contract_id=GET_MODE)(lambda a, b: None)
 
@@ -312,7 +337,8 @@ def test_mcp_contract_on_the_official_mcp_server_and_use_mcp_app(fake_atlas: Fak
     svc.run_in_thread()
     try:
         decl = fake_atlas.declared[("c3", GET_POSE, Transport.MCP)]
-        assert decl["endpoint"] == svc.mcp_endpoint and decl["description"] == "Pose as a tool."
+        assert decl["endpoint"] == svc.mcp_endpoint
+        assert decl["description"] == "Pose as a tool."
 
         async def talk() -> dict:  # type: ignore[type-arg]
             async with Client(svc.mcp_endpoint) as client:
@@ -348,12 +374,14 @@ def test_lifecycle_module_builds_a_driver_servicer() -> None:
         on_state_change=lambda state, detail: pushed.append((state, detail)))
     assert built is not None
     servicer, add_fn, base, method = built
-    assert (base, method) == ("RobonixLifecycleDriver", "Driver") and callable(add_fn)
+    assert (base, method) == ("RobonixLifecycleDriver", "Driver")
+    assert callable(add_fn)
     req = lifecycle_pb2.Driver_Request
     r = servicer.Driver(req(command=0, config_json='{"a": 1}'), None)
     assert (r.ok, r.state, r.error) == (False, "deferred", "no lidar yet")
     r = servicer.Driver(req(command=0, config_json='{"a": 1}'), None)
-    assert (r.ok, r.state) == (True, "inactive") and inits == [{"a": 1}, {"a": 1}]
+    assert (r.ok, r.state) == (True, "inactive")
+    assert inits == [{"a": 1}, {"a": 1}]
     assert pushed == [(None, "no lidar yet"), ("inactive", "")]
     assert lifecycle.parse_cfg(req(config_json="[1]")) == {}
     with pytest.raises(ValueError, match="bad config_json"):
@@ -373,7 +401,8 @@ def test_generated_protos_importable_by_top_level_name(tmp_path: Path) -> None:
     (tmp_path / "src").mkdir()
     try:
         assert find_pkg_root(tmp_path / "src") == tmp_path
-        assert ensure_proto_gen(tmp_path / "src") == gen.parent and str(gen) in sys.path
+        assert ensure_proto_gen(tmp_path / "src") == gen.parent
+        assert str(gen) in sys.path
     finally:
         sys.path.remove(str(gen))
 

@@ -30,7 +30,8 @@ def test_resolution_pin_remap_missing_and_qos() -> None:
                 resolve_topic(atlas, "nav2", "map", MAP, default_qos="reliable", pin="ghost")
             r = resolve_topic(atlas, "nav2", "map", MAP, default_qos="transient_local", remap="/robot/map")
             assert (r.topic, r.qos, r.source) == ("/robot/map", "latched", "topic_remap")
-            assert still_there(atlas, b) and still_there(atlas, r)
+            assert still_there(atlas, b)
+            assert still_there(atlas, r)
             atlas.unregister("mapping_a")
             assert not still_there(atlas, b)
             assert atlas.inspect().get("channels", []) == []  # lookups close their channels

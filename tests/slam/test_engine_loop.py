@@ -42,6 +42,9 @@ def test_engine_counters_and_map_export(mapping_with_lc: MappingRun) -> None:
     assert isinstance(m, GridMap)
     assert set(map(int, set(m.data.ravel().tolist()))) <= {-1, 0, 100}
     # the map covers the apartment (grown in chunks from nothing)
-    assert m.origin_x <= 0.0 and m.origin_y <= 0.0
-    assert m.origin_x + m.width * m.resolution >= 10.0 and m.origin_y + m.height * m.resolution >= 8.0
-    assert eng.optimize_times and eng.last_optimize is not None
+    assert m.origin_x <= 0.0
+    assert m.origin_y <= 0.0
+    assert m.origin_x + m.width * m.resolution >= 10.0
+    assert m.origin_y + m.height * m.resolution >= 8.0
+    assert eng.optimize_times
+    assert eng.last_optimize is not None

@@ -22,7 +22,7 @@ def scene() -> tuple:
     return world, rec, lookup
 
 
-@pytest.mark.parametrize("k,offset", [(0, (0.2, -0.15, 0.1)), (120, (-0.25, 0.1, -0.15)), (300, (0.05, 0.22, 0.0)),
+@pytest.mark.parametrize(("k", "offset"), [(0, (0.2, -0.15, 0.1)), (120, (-0.25, 0.1, -0.15)), (300, (0.05, 0.22, 0.0)),
                                       (450, (0.0, 0.0, 0.18))])
 def test_recovers_known_offset_on_map(scene: tuple, k: int, offset: tuple) -> None:
     _, rec, lookup = scene
@@ -33,7 +33,8 @@ def test_recovers_known_offset_on_map(scene: tuple, k: int, offset: tuple) -> No
     assert np.hypot(err[0], err[1]) < 0.03  # the GT raster puts walls up to half a cell off
     assert abs(np.remainder(err[2] + np.pi, 2 * np.pi) - np.pi) < 0.01
     assert m.response > 0.5
-    assert m.covariance.shape == (3, 3) and np.all(np.linalg.eigvalsh(m.covariance) > 0)
+    assert m.covariance.shape == (3, 3)
+    assert np.all(np.linalg.eigvalsh(m.covariance) > 0)
 
 
 def test_scan_to_scan_is_subcentimetre(scene: tuple) -> None:
@@ -73,4 +74,5 @@ def test_empty_points_do_not_crash(scene: tuple) -> None:
     _, _, lookup = scene
     m = match_scan(lookup, np.zeros((0, 2)), np.zeros(3), window_xy=0.3, window_theta=0.2, angular_step=0.01,
                    coarse_factor=4)
-    assert m.response == 0.0 and m.n_points == 0
+    assert m.response == 0.0
+    assert m.n_points == 0

@@ -44,7 +44,10 @@ def test_grid_grows_in_chunks_and_keeps_content() -> None:
     g.integrate(np.array([-5.0, -3.0]), np.array([[-7.02, -3.0]]))
     g.integrate(np.array([-5.0, -3.0]), np.array([[-7.02, -3.0]]))
     after = g.logodds.shape
-    assert after[0] >= before[0] and after[1] > before[1]
-    assert g.logodds.shape[0] % 16 == 0 and g.logodds.shape[1] % 16 == 0
-    assert _cell(g, 0.52, 0.0) == 100 and _cell(g, -7.02, -3.0) == 100
+    assert after[0] >= before[0]
+    assert after[1] > before[1]
+    assert g.logodds.shape[0] % 16 == 0
+    assert g.logodds.shape[1] % 16 == 0
+    assert _cell(g, 0.52, 0.0) == 100
+    assert _cell(g, -7.02, -3.0) == 100
     assert _cell(g, -6.0, -3.0) == 0

@@ -31,7 +31,8 @@ def test_png_overlays_and_scale() -> None:
                          plan=np.array([[0.5, 0.0, 0.0], [1.5, 0.5, 0.0]]), scale=2)
     img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
     assert img.shape == (80, 120, 3)
-    assert (img[..., 0] > 200).sum() > 0 and ((img[..., 0] > 200) & (img[..., 1] < 50)).any()  # red robot
+    assert (img[..., 0] > 200).sum() > 0
+    assert ((img[..., 0] > 200) & (img[..., 1] < 50)).any()
     with pytest.raises(ValueError):
         render_map_png(g, scale=0)
 

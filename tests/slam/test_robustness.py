@@ -41,7 +41,8 @@ def test_nan_inf_beams_are_dropped_and_counted(rec) -> None:
 def test_empty_or_invalid_scans_are_skipped(ranges: np.ndarray) -> None:
     eng = SlamEngine()
     u = eng.process(_scan(ranges), [0, 0, 0])
-    assert not u.integrated and u.skipped_reason
+    assert not u.integrated
+    assert u.skipped_reason
     assert eng.stats.scans_skipped_invalid == 1
     assert eng.graph.n_nodes == 0
 
@@ -52,7 +53,8 @@ def test_malformed_scan_metadata_is_skipped(kwargs: dict) -> None:
     base = dict(ranges=np.full(360, 2.0, np.float32), angle_min=-math.pi, angle_increment=0.0175)
     eng = SlamEngine()
     u = eng.process(Scan(**{**base, **kwargs}), [0, 0, 0])
-    assert not u.integrated and eng.stats.scans_skipped_invalid == 1
+    assert not u.integrated
+    assert eng.stats.scans_skipped_invalid == 1
     assert any(k in u.skipped_reason for k in kwargs)
 
 
@@ -60,7 +62,8 @@ def test_malformed_scan_metadata_is_skipped(kwargs: dict) -> None:
 def test_bad_odometry_is_skipped(rec, odom) -> None:
     eng = SlamEngine()
     u = eng.process(rec.scans[0], odom)
-    assert not u.integrated and "odom_pose" in u.skipped_reason
+    assert not u.integrated
+    assert "odom_pose" in u.skipped_reason
 
 
 def test_not_a_scan_and_time_going_backwards(rec) -> None:
@@ -68,7 +71,8 @@ def test_not_a_scan_and_time_going_backwards(rec) -> None:
     assert eng.process("scan", rec.odom[0]).skipped_reason.startswith("expected a Scan")  # type: ignore[arg-type]
     assert eng.process(rec.scans[10], rec.odom[10]).integrated
     u = eng.process(rec.scans[5], rec.odom[5])
-    assert not u.integrated and eng.stats.scans_skipped_time == 1
+    assert not u.integrated
+    assert eng.stats.scans_skipped_time == 1
 
 
 def test_odom_jump_is_skipped_and_pose_stays_continuous(rec) -> None:
@@ -79,7 +83,8 @@ def test_odom_jump_is_skipped_and_pose_stays_continuous(rec) -> None:
         odom = compose(jump, o) if k >= 100 else o
         u = eng.process(s, odom)
         if k == 100:
-            assert u.skipped_reason.startswith("odometry jump") and not u.integrated
+            assert u.skipped_reason.startswith("odometry jump")
+            assert not u.integrated
         errs.append(np.hypot(*(u.pose_map[:2] - rec.gt[k][:2])))
     assert eng.stats.odom_jumps == 1
     assert max(errs[101:]) < 0.1  # tracking continues in the map frame after re-anchoring
@@ -104,7 +109,8 @@ def test_localization_without_map_is_a_clear_error() -> None:
         eng.set_mode("localization")
     eng2 = SlamEngine(mode="localization")
     u = eng2.process(_scan(np.full(360, 2.0)), [0, 0, 0])
-    assert not u.integrated and "without a map" in u.skipped_reason
+    assert not u.integrated
+    assert "without a map" in u.skipped_reason
 
 
 def test_reset_clears_everything(rec) -> None:
@@ -113,5 +119,6 @@ def test_reset_clears_everything(rec) -> None:
         eng.process(s, o)
     assert eng.graph.n_nodes > 0
     eng.reset()
-    assert eng.graph.n_nodes == 0 and eng.stats.scans_received == 0
+    assert eng.graph.n_nodes == 0
+    assert eng.stats.scans_received == 0
     assert (eng.map().data == -1).all()

@@ -28,7 +28,8 @@ def test_round_trip_and_continue_mapping(mapping_with_lc: MappingRun, tmp_path: 
     # re-rendered from the saved scans at the optimised poses (the live map re-renders only nodes that
     # moved more than re_render_threshold, so a few cells may differ)
     a, b = eng.map(), src.map()
-    assert a.data.shape == b.data.shape and (a.origin_x, a.origin_y) == (b.origin_x, b.origin_y)
+    assert a.data.shape == b.data.shape
+    assert (a.origin_x, a.origin_y) == (b.origin_x, b.origin_y)
     known = (a.data >= 0) | (b.data >= 0)
     assert np.mean(a.data[known] == b.data[known]) > 0.99
     rec = drive(apartment_world(), range_noise=0.02, odom_noise=DRIFT, seed=11)

@@ -45,7 +45,8 @@ def test_failed_save_keeps_the_previous_map_and_leaves_no_staging(tmp_path: Path
     assert _visible(tmp_path) == ["m"]
     assert np.count_nonzero(load_map_yaml(tmp_path / "m" / "map.yaml").data == 0) == 200
     store.save("m", _grid(100), None, "third")  # overwrite swaps the folder in whole
-    assert store.list()[0]["note"] == "third" and _visible(tmp_path) == ["m"]
+    assert store.list()[0]["note"] == "third"
+    assert _visible(tmp_path) == ["m"]
     store.delete("m")
     with pytest.raises(MapStoreError, match="no map 'm'"):
         store.load("m", with_session=False)

@@ -61,7 +61,8 @@ def test_boot_slam_before_hal_defers_then_serves_map(tmp_path: Path) -> None:
                 tf.close()
             # a subscriber created after the map was published still gets it (transient_local)
             grid = node.wait_for_message("/map", OccupancyGrid, 60, "latched")
-            assert grid is not None and grid.header.frame_id == "map"
+            assert grid is not None
+            assert grid.header.frame_id == "map"
             assert grid.info.width * grid.info.height == len(grid.data) > 100
 
         boot.interrupt()

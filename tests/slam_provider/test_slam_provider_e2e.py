@@ -96,7 +96,8 @@ def env(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory) ->
     # before INIT: the RPCs are live but say so; a bad config is an Err naming the field
     card = slam.stub(M + "map_card", rpc.RobonixServiceMapMapCardStub).GetMapCard(map_pb2.GetMapCard_Request(),
                                                                                    timeout=30)
-    assert not card.ok and "not initialized" in card.detail
+    assert not card.ok
+    assert "not initialized" in card.detail
     for bad, field in (({"slam": {"resolutoin": 0.05}}, "resolutoin"), ({"slam": {"resolution": -1}}, "resolution"),
                        ({"frames": {"map": ""}}, "frames.map"), ({"map_publish_period_s": 0}, "map_publish_period_s"),
                        ({"mode": "slam"}, "mode"), ({"bogus": 1}, "bogus")):
@@ -162,9 +163,11 @@ def test_save_list_and_localize_on_saved_map(env: Env) -> None:
     folder = env.map_dir / "room1"
     assert {p.name for p in folder.iterdir()} == {"map.yaml", "map.pgm", "session.npz", "meta.json", ".robonix-map"}
     grid = load_map_yaml(folder / "map.yaml")
-    assert grid.width > 50 and np.count_nonzero(grid.data == 100) > 100
+    assert grid.width > 50
+    assert np.count_nonzero(grid.data == 100) > 100
     listed = json.loads(env.rpc("list_maps").ListMaps(map_pb2.ListMaps_Request(), timeout=30).maps_json)
-    assert [m["map_id"] for m in listed] == ["room1"] and listed[0]["note"] == "test room"
+    assert [m["map_id"] for m in listed] == ["room1"]
+    assert listed[0]["note"] == "test room"
 
     g = env.gt()
     load = env.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="room1", mode="localization",
@@ -177,7 +180,8 @@ def test_save_list_and_localize_on_saved_map(env: Env) -> None:
     wait_until(lambda: env.stats()["engine"]["scans_integrated"] > n0 + 2, 60, "localization updates")
     g = env.gt()
     p = env.rpc("get_pose").GetPose(map_pb2.GetPose_Request(), timeout=30)
-    assert p.ok and p.frame_id == "map"
+    assert p.ok
+    assert p.frame_id == "map"
     err = float(np.hypot(p.x - g.x, p.y - g.y))
     dth = abs((p.theta - g.theta + np.pi) % (2 * np.pi) - np.pi)
     assert err < 0.05 and dth < 0.05, (err, dth, p, g)
@@ -186,23 +190,27 @@ def test_save_list_and_localize_on_saved_map(env: Env) -> None:
 def test_bad_requests_fail_clearly(env: Env) -> None:
     with pytest.raises(grpc.RpcError) as info:
         env.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="../escape"), timeout=30)
-    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "map_id" in info.value.details()
+    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "map_id" in info.value.details()
     with pytest.raises(grpc.RpcError) as info:
         env.rpc("pose_estimate").PoseEstimate(map_pb2.PoseEstimate_Request(x=float("nan")), timeout=30)
-    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "x:" in info.value.details()
+    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "x:" in info.value.details()
     broken = env.map_dir / "broken"
     broken.mkdir()
     (broken / "map.yaml").write_text("image: [unclosed\nresolution: 0.05\n")
     r = env.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="broken", mode="localization"), timeout=30)
     assert not r.ok and str(broken / "map.yaml") in r.detail, r.detail
     r = env.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="nope"), timeout=30)
-    assert not r.ok and "no map 'nope'" in r.detail
+    assert not r.ok
+    assert "no map 'nope'" in r.detail
     assert env.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).mode == "localization"  # kept
     d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
     assert not d.ok and ".robonix-map marker" in d.detail and broken.exists(), d.detail  # not written by the store
     (broken / ".robonix-map").write_text("")
     d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
-    assert d.ok and not broken.exists()
+    assert d.ok
+    assert not broken.exists()
 
 
 def test_bad_scans_are_skipped_and_counted(env: Env) -> None:
@@ -238,12 +246,17 @@ def test_bad_scans_are_skipped_and_counted(env: Env) -> None:
 
 def test_map_card_grpc_cli_and_mcp(env: Env, tmp_path: Path) -> None:
     card = env.rpc("map_card").GetMapCard(map_pb2.GetMapCard_Request(), timeout=60)
-    assert card.ok and card.frame_id == "map" and card.has_robot_pose
+    assert card.ok
+    assert card.frame_id == "map"
+    assert card.has_robot_pose
     img = Image.open(io.BytesIO(card.png))
-    assert img.format == "PNG" and img.size == (card.width, card.height)
-    assert card.resolution == pytest.approx(0.05) and len(card.footprint_polygon_xy) == 8
+    assert img.format == "PNG"
+    assert img.size == (card.width, card.height)
+    assert card.resolution == pytest.approx(0.05)
+    assert len(card.footprint_polygon_xy) == 8
     g = env.gt()
-    assert abs(card.robot_x - g.x) < 0.1 and abs(card.robot_y - g.y) < 0.1
+    assert abs(card.robot_x - g.x) < 0.1
+    assert abs(card.robot_y - g.y) < 0.1
 
     out = tmp_path / "card" / "map.png"
     exe = Path(sys.executable).parent / "rbnx"
@@ -251,7 +264,9 @@ def test_map_card_grpc_cli_and_mcp(env: Env, tmp_path: Path) -> None:
     res = subprocess.run(cmd + ["--atlas", env.slam.atlas, "map-card", "-o", str(out)], capture_output=True,
                          text=True, timeout=120, cwd=REPO)
     assert res.returncode == 0, res.stderr
-    assert str(out) in res.stdout and "from mapping" in res.stdout and len(res.stdout.strip().splitlines()) == 1
+    assert str(out) in res.stdout
+    assert "from mapping" in res.stdout
+    assert len(res.stdout.strip().splitlines()) == 1
     assert Image.open(out).format == "PNG"
 
     from mcp import Client
@@ -265,7 +280,8 @@ def test_map_card_grpc_cli_and_mcp(env: Env, tmp_path: Path) -> None:
 
     names, result = asyncio.run(asyncio.wait_for(talk(), 60))
     assert {"save_map", "load_map", "list_maps", "switch_mode", "get_mode", "get_pose", "reset_map", "map_card"} <= names
-    assert result.structured_content["ok"] is True and result.structured_content["mode"] == "localization"
+    assert result.structured_content["ok"] is True
+    assert result.structured_content["mode"] == "localization"
 
 
 def test_unwritable_map_dir_and_reset(env: Env, tmp_path: Path) -> None:

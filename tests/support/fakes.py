@@ -37,7 +37,7 @@ class FakeAtlas:
         self.known: set[str] = set()
         self.closed = False
 
-    def register(self, kind: Any, id: str, namespace: str, capability_md_path: str = "",  # noqa: A002
+    def register(self, kind: Any, id: str, namespace: str, capability_md_path: str = "",
                  capability_md: str = "") -> str:
         with self.lock:
             self.registrations.append(dict(kind=kind, id=id, namespace=namespace,
@@ -56,12 +56,12 @@ class FakeAtlas:
             self.declared[key] = dict(endpoint=endpoint, params=params, description=description)
             return endpoint
 
-    def set_state(self, id: str, state: LifecycleState, detail: str = "") -> LifecycleState:  # noqa: A002
+    def set_state(self, id: str, state: LifecycleState, detail: str = "") -> LifecycleState:
         with self.lock:
             self.states.append((id, state, detail))
         return LifecycleState.REGISTERED
 
-    def heartbeat(self, id: str) -> None:  # noqa: A002
+    def heartbeat(self, id: str) -> None:
         with self.lock:
             self.heartbeats += 1
             if id not in self.known:

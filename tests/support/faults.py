@@ -11,6 +11,7 @@ when every provider was ACTIVE again. Everything started here is stopped here, b
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -252,10 +253,8 @@ class SimBoot:
         self.pids()
         subprocess.run(rbnx_cmd() + ["shutdown", "-f", str(self.deploy)], env=self.env, cwd=self.tmp,
                        capture_output=True, text=True, timeout=timeout_s, stdin=subprocess.DEVNULL)
-        try:
+        with contextlib.suppress(subprocess.TimeoutExpired):
             self.proc.wait(timeout_s)
-        except subprocess.TimeoutExpired:
-            pass
         own = self.own_atlas.pid if self.own_atlas is not None else None
         self._stop_own_atlas()
         deadline = time.monotonic() + 30
@@ -294,10 +293,8 @@ class SimBoot:
         for pid in self.seen:
             if alive(pid):
                 for sig in (signal.SIGCONT, signal.SIGKILL):
-                    try:
+                    with contextlib.suppress(ProcessLookupError):
                         os.kill(pid, sig)
-                    except ProcessLookupError:
-                        pass
 
     def __enter__(self) -> SimBoot:
         return self
@@ -403,7 +400,5 @@ class Recorder:
 
 
 def signal_pid(pid: int, sig: int) -> None:
-    try:
+    with contextlib.suppress(ProcessLookupError):
         os.kill(pid, sig)
-    except ProcessLookupError:
-        pass

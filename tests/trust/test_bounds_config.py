@@ -56,7 +56,8 @@ def test_config_json_depth_and_size_are_checked_before_parsing() -> None:
             parse_config_json(hostile)
     assert time.perf_counter() - t0 < 20  # generous: linear work is well under a second even when loaded
     at_limit = parse_config_json('{"a": ' + "[" * 31 + "]" * 31 + "}")  # 32 levels: still accepted
-    assert list(at_limit) == ["a"] and json_depth(str(at_limit["a"])) == 31
+    assert list(at_limit) == ["a"]
+    assert json_depth(str(at_limit["a"])) == 31
 
 
 def test_errors_never_echo_unbounded_input() -> None:

@@ -75,6 +75,7 @@ def test_deep_and_oversized_config_json_are_refused(hal: Proc) -> None:
         with pytest.raises(grpc.RpcError) as info:
             driver.Driver(lifecycle_pb2.Driver_Request(command=INIT, config_json=text), timeout=60)
         assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT
-        assert (info.value.details() or "").startswith("config_json: ") and what in info.value.details()
+        assert (info.value.details() or "").startswith("config_json: ")
+        assert what in info.value.details()
     resp = driver.Driver(lifecycle_pb2.Driver_Request(command=ACTIVATE), timeout=60)  # the session is intact
     assert (resp.ok, resp.state) == (True, "active")

@@ -37,7 +37,8 @@ def test_mcp_endpoint_checked_too_and_loopback_forms_pass(token_atlas: AtlasServ
         req.params.mcp.input_schema_json = "{}"
         with pytest.raises(grpc.RpcError) as err:
             stub.DeclareCapability(req, timeout=5, metadata=md())
-        assert err.value.code() == grpc.StatusCode.INVALID_ARGUMENT and "evil.example.com" in err.value.details()
+        assert err.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert "evil.example.com" in err.value.details()
         req.endpoint = "http://127.0.0.1:41237/mcp/"
         assert stub.DeclareCapability(req, timeout=5, metadata=md()).endpoint == req.endpoint
         for ep in ("127.0.0.1:5000", "localhost:5001", "[::1]:5002", "127.0.1.1:5003"):

@@ -92,7 +92,8 @@ def test_oversized_and_malformed_names_are_refused_briefly(slam: Slam, map_id: s
     assert details.startswith(field + ":") and len(details) <= 1024, details[:300]
     assert not any("\n" in p.name for p in slam.map_dir.iterdir())
     listed = slam.rpc("list_maps").ListMaps(map_pb2.ListMaps_Request(), timeout=30)
-    assert listed.ok and all(len(m["note"]) <= 4096 for m in json.loads(listed.maps_json))
+    assert listed.ok
+    assert all(len(m["note"]) <= 4096 for m in json.loads(listed.maps_json))
 
 
 def test_poses_out_of_range_are_refused(slam: Slam) -> None:
@@ -100,5 +101,6 @@ def test_poses_out_of_range_are_refused(slam: Slam) -> None:
                        (map_pb2.PoseEstimate_Request(x=0, y=0, theta=-1e308), "theta")):
         with pytest.raises(grpc.RpcError) as info:
             slam.rpc("pose_estimate").PoseEstimate(req, timeout=30)
-        assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT and info.value.details().startswith(field + ":")
+        assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert info.value.details().startswith(field + ":")
     wait_until(lambda: slam.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).ok, 30, "SLAM answering")

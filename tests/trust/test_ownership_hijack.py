@@ -83,7 +83,8 @@ def test_registry_ownership_rule() -> None:
     reg.register(Kind.SERVICE, "nav2", "robonix/service/navigation")
     with pytest.raises(RegistryError) as err:
         reg.register(Kind.SERVICE, "nav2", "robonix/service/navigation", may_replace_live=False)
-    assert err.value.code == "ALREADY_EXISTS" and err.value.message.startswith("id: ")
+    assert err.value.code == "ALREADY_EXISTS"
+    assert err.value.message.startswith("id: ")
     reg.set_state("nav2", LifecycleState.TERMINATED)
     _, reg_id = reg.register_ex(Kind.SERVICE, "nav2", "robonix/service/navigation", may_replace_live=False)
     with pytest.raises(RegistryError) as err:

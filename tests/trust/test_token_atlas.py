@@ -28,7 +28,8 @@ def test_mutating_rpcs_need_the_token_and_name_it(token_atlas: AtlasServer) -> N
         with pytest.raises(grpc.RpcError) as err:
             register(stub, "nav2", "robonix/service/navigation", token=None)
         assert err.value.code() == grpc.StatusCode.UNAUTHENTICATED
-        assert "robonix-token" in err.value.details() and "RegisterService" in err.value.details()
+        assert "robonix-token" in err.value.details()
+        assert "RegisterService" in err.value.details()
         with pytest.raises(grpc.RpcError) as err:
             register(stub, "nav2", "robonix/service/navigation", token="wrong")
         assert err.value.code() == grpc.StatusCode.PERMISSION_DENIED
@@ -52,7 +53,8 @@ def test_mutating_rpcs_need_the_token_and_name_it(token_atlas: AtlasServer) -> N
 
         # Reading stays open: Query, QueryContract, ListContracts, InspectAtlas without any token.
         (prov,) = stub.Query(atlas_pb2.QueryRequest(id="nav2"), timeout=5).providers
-        assert prov.state != atlas_pb2.STATE_TERMINATED and prov.capabilities[0].contract_id == NAV
+        assert prov.state != atlas_pb2.STATE_TERMINATED
+        assert prov.capabilities[0].contract_id == NAV
         assert stub.QueryContract(atlas_pb2.QueryContractRequest(contract_id=NAV), timeout=5).found
         assert stub.ListContracts(atlas_pb2.ListContractsRequest(), timeout=5).contracts
         assert "nav2" in stub.InspectAtlas(atlas_pb2.InspectAtlasRequest(), timeout=5).json

@@ -34,15 +34,20 @@ def test_state_file_is_private_and_token_is_found_by_atlas(tmp_path: Path, monke
 
 def test_boot_env_drops_a_stale_token_and_passes_allowed_hosts() -> None:
     env = deploytoken.boot_env({TOKEN_ENV: "stale", "X": "1"}, "", ["robot2.local"])
-    assert TOKEN_ENV not in env and env["X"] == "1" and env["ROBONIX_ATLAS_ALLOWED_HOSTS"] == "robot2.local"
+    assert TOKEN_ENV not in env
+    assert env["X"] == "1"
+    assert env["ROBONIX_ATLAS_ALLOWED_HOSTS"] == "robot2.local"
     assert deploytoken.boot_env({}, "fresh")[TOKEN_ENV] == "fresh"
     a, b = deploytoken.new_token(), deploytoken.new_token()
-    assert a != b and len(a) >= 40
+    assert a != b
+    assert len(a) >= 40
 
 
 def test_rbnx_token_without_a_boot_is_one_line_exit_1(tmp_path: Path) -> None:
     env = {"PATH": "/usr/bin:/bin", "RBNX_STATE_DIR": str(tmp_path), "HOME": str(tmp_path)}
     r = subprocess.run([sys.executable, "-m", "rbnx.cli", "--atlas", "127.0.0.1:1", "token"], env=env,
                        capture_output=True, text=True, timeout=60)
-    assert r.returncode == 1 and r.stdout == ""
-    assert r.stderr.count("\n") == 1 and "no deployment token recorded" in r.stderr
+    assert r.returncode == 1
+    assert r.stdout == ""
+    assert r.stderr.count("\n") == 1
+    assert "no deployment token recorded" in r.stderr

@@ -41,9 +41,11 @@ def _gateway_calls(url: str, token: str) -> tuple[str, bool, str]:
             listed = await stranger.call_tool("list_services", {})
             assert not listed.is_error  # reading is open
             refused = await stranger.call_tool("nav2.navigate", goal)
-            assert refused.is_error and "deployment token" in refused.content[0].text
+            assert refused.is_error
+            assert "deployment token" in refused.content[0].text
             paused = await stranger.call_tool("deactivate", {"entry": "mapping"})
-            assert paused.is_error and "deployment token" in paused.content[0].text
+            assert paused.is_error
+            assert "deployment token" in paused.content[0].text
         os.environ[TOKEN_ENV] = token  # what an agent does with `rbnx token`
         try:
             async with mcp_client(url, read_timeout_seconds=120) as agent:

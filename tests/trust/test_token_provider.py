@@ -59,7 +59,8 @@ def test_grpc_driver_and_navigate_need_the_token_status_does_not(provider: Servi
     for md, code in ((None, grpc.StatusCode.UNAUTHENTICATED), ([(auth.METADATA_KEY, "x")], grpc.StatusCode.PERMISSION_DENIED)):
         with pytest.raises(grpc.RpcError) as err:
             _navigate(ep, md)
-        assert err.value.code() == code and "Navigate" in err.value.details()
+        assert err.value.code() == code
+        assert "Navigate" in err.value.details()
         with grpc.insecure_channel(ep) as ch, pytest.raises(grpc.RpcError) as err:
             rc.RobonixLifecycleDriverStub(ch).Driver(lifecycle_pb2.Driver_Request(command=0), timeout=10, metadata=md)
         assert err.value.code() == code
@@ -82,12 +83,15 @@ def test_mcp_navigate_needs_bearer_token_status_does_not(provider: Service) -> N
     async def talk() -> None:
         async with Client(provider.mcp_url) as c:  # no token
             r = await c.call_tool("navigate", {})
-            assert r.is_error and "deployment token required" in r.content[0].text
+            assert r.is_error
+            assert "deployment token required" in r.content[0].text
             r = await c.call_tool("status", {})
-            assert not r.is_error and r.structured_content["state"] == "IDLE"
+            assert not r.is_error
+            assert r.structured_content["state"] == "IDLE"
         async with auth.mcp_client(provider.mcp_url) as c:  # Authorization: Bearer from the environment
             r = await c.call_tool("navigate", {})
-            assert not r.is_error and r.structured_content["accepted"] is True
+            assert not r.is_error
+            assert r.structured_content["accepted"] is True
 
     asyncio.run(asyncio.wait_for(talk(), 60))
     assert len(provider.goals) == 1  # type: ignore[attr-defined]
