@@ -11,6 +11,12 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+# The two spellings of a planar pose ``(x, y, theta)`` in this project, one name each:
+Pose2D = tuple[float, float, float]
+"""A single pose as plain floats: what services, controllers and the simulator pass around."""
+PoseArray = NDArray[np.float64]
+"""A pose (shape ``(3,)``) or a batch of poses (shape ``(n, 3)``) as a numpy array: what SLAM computes with."""
+
 
 def wrap_angle(a: ArrayLike) -> NDArray[np.float64] | float:
     """Wrap angle(s) to [-pi, pi)."""
