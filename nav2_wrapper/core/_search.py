@@ -1,7 +1,15 @@
-"""numba kernels for the global planner: cost-aware 8-connected A* and the line-of-sight shortcut pass.
+"""numba kernels for the global planner: cost-aware 8-connected A*, the backtrack
+that recovers a path from the search's g values, and the line-of-sight shortcut pass.
 
 Kept apart from planner.py so the Python-level logic stays readable; compiled with cache=True so only
 the first process on a machine pays the compile time.
+
+Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation reads and
+writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is 2·stamp
+(seen) or 2·stamp+1 (closed) for the plan with that stamp, so the buffer is reused between plans without
+clearing. No parent array: ``backtrack`` walks the g values back. The open list is a 4-ary heap of single
+int64 entries (f as float32 bits above the cell index): a heap move is one 8-byte copy, and a pop sifts
+down half as many levels as in a binary heap.
 """
 
 from __future__ import annotations
@@ -12,135 +20,198 @@ import numpy as np
 from numba import njit
 
 SQRT2 = math.sqrt(2.0)
+TIE_EPS = 1e-6
+"""Relative weight added to h so that, among equal f = g + h, the node nearer the goal (larger g) pops first.
+
+Open areas have long plateaus of equal f; without this the search fans out over the whole plateau. The
+price is a (1 + TIE_EPS) bound on the path cost, the order of the float32 rounding of the stored g."""
 
 
 @njit(cache=True, inline="always")
-def _heap_push(keys, vals, n, k, v):
+def _pack(f, idx):
+    """One int64 heap entry: f as float32 bits (order-preserving for f >= 0) above the cell index."""
+    return (np.int64(np.float32(f).view(np.int32)) << 32) | np.int64(idx)
+
+
+@njit(cache=True, inline="always")
+def _hpush(heap, n, e):
     i = n
-    keys[i] = k
-    vals[i] = v
     while i > 0:
-        p = (i - 1) >> 1
-        if keys[p] <= keys[i]:
+        p = (i - 1) >> 2
+        pe = heap[p]
+        if pe <= e:
             break
-        keys[p], keys[i] = keys[i], keys[p]
-        vals[p], vals[i] = vals[i], vals[p]
+        heap[i] = pe
         i = p
+    heap[i] = e
     return n + 1
 
 
 @njit(cache=True, inline="always")
-def _heap_pop(keys, vals, n):
-    v = vals[0]
+def _hpop(heap, n):
+    top = heap[0]
     n -= 1
-    keys[0] = keys[n]
-    vals[0] = vals[n]
+    e = heap[n]
     i = 0
     while True:
-        lc = 2 * i + 1
-        if lc >= n:
+        c = 4 * i + 1
+        if c >= n:
             break
-        rc = lc + 1
-        m = lc if (rc >= n or keys[lc] <= keys[rc]) else rc
-        if keys[i] <= keys[m]:
+        m = c
+        mv = heap[c]
+        end = min(c + 4, n)
+        for j in range(c + 1, end):
+            if heap[j] < mv:
+                m = j
+                mv = heap[j]
+        if e <= mv:
             break
-        keys[m], keys[i] = keys[i], keys[m]
-        vals[m], vals[i] = vals[i], vals[m]
+        heap[i] = mv
         i = m
-    return v, n
+    heap[i] = e
+    return top & 0xFFFFFFFF, n
+
+
+@njit(cache=True, inline="always")
+def _grow(heap, n):
+    """The heap with room for at least one more entry."""
+    if n < heap.shape[0]:
+        return heap
+    grown = np.empty(2 * heap.shape[0], np.int64)
+    grown[:n] = heap[:n]
+    return grown
+
+
+@njit(cache=True, inline="always")
+def _move_cost(flat, table, cols, fr, fc, tr, tc, sr, sc, esc_r2, esc_cost):
+    """Cost of the 8-connected move (fr, fc) -> (tr, tc): the entered cell's traversal factor times the step
+    length; cells within sqrt(esc_r2) of the start (sr, sc) are passable at ``esc_cost`` even when blocked;
+    no diagonal squeeze between two blocked orthogonal cells (outside that escape disc). inf = not allowed."""
+    f = table[flat[tr * cols + tc]]
+    near = (tr - sr) * (tr - sr) + (tc - sc) * (tc - sc) <= esc_r2
+    if f == np.inf:
+        if not near:
+            return np.inf
+        f = esc_cost
+    if fr != tr and fc != tc:
+        if not near and table[flat[fr * cols + tc]] == np.inf and table[flat[tr * cols + fc]] == np.inf:
+            return np.inf
+        return SQRT2 * f
+    return f
+
+
+@njit(cache=True, inline="always")
+def _octile(r, c, tr, tc):
+    dr = abs(r - tr)
+    dc = abs(c - tc)
+    return (dr + dc) + (SQRT2 - 2.0) * min(dr, dc)
+
+
+@njit(cache=True, inline="always")
+def _neighbour(r, c, k):
+    """k-th of the 8 neighbours: the 4 orthogonal ones first."""
+    if k < 4:
+        return r + (k == 1) - (k == 0), c + (k == 3) - (k == 2)
+    return r + (1 if k >= 6 else -1), c + (1 if (k & 1) else -1)
 
 
 @njit(cache=True)
-def astar(costs, table, start, goal, g, parent, state, stamp, esc_r2, esc_cost, h_weight):
-    """A* from cell ``start`` to ``goal`` (flat indices) on ``costs`` (uint8, rows×cols).
+def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_scale):
+    """One-sided A* from cell ``start`` to ``goal`` (flat indices) on ``costs`` (uint8, rows×cols).
 
-    ``table[c]`` is the traversal factor of cost c (inf = blocked). Cells within sqrt(esc_r2) cells of the
-    start are passable at ``esc_cost`` even when blocked, so a robot whose centre sits in the inscribed band
-    can leave it. ``state`` holds 2·stamp (seen) or 2·stamp+1 (closed) for this search, so the buffers are
-    reused without clearing (compact buffers: the search is memory-bound on large maps).
-    Returns (found, expansions).
+    ``table[c]`` is the traversal factor of cost c (inf = blocked); moves cost as in ``_move_cost``. The
+    heuristic is the octile distance times ``h_scale`` (the smallest traversal factor, so it stays
+    admissible and consistent) times ``h_weight`` (1.0 = cost-optimal). ``rec`` is the search record (see
+    the module doc); on failure every cell reachable from the start is closed. Returns (found, expansions).
     """
     rows, cols = costs.shape
     flat = costs.ravel()
+    recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
-    cap = 1 << 16
-    keys = np.empty(cap, np.float64)
-    vals = np.empty(cap, np.int64)
-    n = 0
+    heap = np.empty(1 << 14, np.int64)
     seen = 2 * stamp
     done = seen + 1
-    g[start] = 0.0
-    parent[start] = -1
-    state[start] = seen
-    n = _heap_push(keys, vals, n, 0.0, start)
-    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
-    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
+    hw = h_weight * h_scale * (1.0 + TIE_EPS)
+    recg[2 * start + 1] = 0.0
+    rec[2 * start] = seen
+    n = _hpush(heap, 0, _pack(0.0, start))
     expansions = 0
     while n > 0:
-        cur, n = _heap_pop(keys, vals, n)
-        if state[cur] == done:
+        cur, n = _hpop(heap, n)
+        if rec[2 * cur] == done:
             continue
-        state[cur] = done
+        rec[2 * cur] = done
         expansions += 1
         if cur == goal:
             return True, expansions
-        r, c = cur // cols, cur % cols
-        gcur = g[cur]
+        r = cur // cols
+        c = cur - r * cols
+        gcur = np.float64(recg[2 * cur + 1])
         for k in range(8):
-            nr, nc = r + drs[k], c + dcs[k]
+            nr, nc = _neighbour(r, c, k)
             if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
                 continue
             nb = nr * cols + nc
-            st = state[nb]
+            st = rec[2 * nb]
             if st == done:
                 continue
-            f = table[flat[nb]]
-            if f == np.inf:
-                if (nr - sr) * (nr - sr) + (nc - sc) * (nc - sc) > esc_r2:
-                    continue
-                f = esc_cost
-            if k >= 4:
-                # no diagonal squeeze between two blocked orthogonal neighbours
-                if table[flat[r * cols + nc]] == np.inf and table[flat[nr * cols + c]] == np.inf:
-                    if (nr - sr) * (nr - sr) + (nc - sc) * (nc - sc) > esc_r2:
-                        continue
-                step = SQRT2 * f
-            else:
-                step = f
+            step = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+            if step == np.inf:
+                continue
             ng = gcur + step
-            if st != seen or ng < g[nb]:
-                state[nb] = seen
-                g[nb] = ng
-                parent[nb] = cur
-                dr = abs(nr - gr)
-                dc = abs(nc - gc)
-                h = (dr + dc) + (SQRT2 - 2.0) * min(dr, dc)
-                if n >= cap:
-                    cap *= 2
-                    nk = np.empty(cap, np.float64)
-                    nv = np.empty(cap, np.int64)
-                    nk[:n] = keys[:n]
-                    nv[:n] = vals[:n]
-                    keys, vals = nk, nv
-                n = _heap_push(keys, vals, n, ng + h_weight * h, nb)
+            if st != seen or ng < recg[2 * nb + 1]:
+                rec[2 * nb] = seen
+                recg[2 * nb + 1] = ng
+                heap = _grow(heap, n)
+                n = _hpush(heap, n, _pack(ng + hw * _octile(nr, nc, gr, gc), nb))
     return False, expansions
 
 
 @njit(cache=True)
-def backtrack(parent, goal):
-    """Flat cell indices from the start to ``goal`` following ``parent``."""
-    n = 0
-    cur = goal
-    while cur != -1:
-        n += 1
-        cur = parent[cur]
-    out = np.empty(n, np.int64)
-    cur = goal
-    for i in range(n - 1, -1, -1):
-        out[i] = cur
-        cur = parent[cur]
-    return out
+def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
+    """Flat cell indices from ``start`` to ``cell`` through the cells the last ``astar`` with ``stamp`` closed.
+
+    Each step goes back to the closed neighbour whose g plus the move cost is smallest: that is the
+    neighbour the search relaxed the cell from (or one tying with it), so the path's cost is the search's
+    g. g drops by at least 1 per step, so the walk ends at the start (g = 0).
+    """
+    rows, cols = costs.shape
+    flat = costs.ravel()
+    recg = rec.view(np.float32)
+    sr, sc = start // cols, start % cols
+    done = 2 * stamp + 1
+    out = np.empty(256, np.int64)
+    m = 0
+    cur = cell
+    while m <= rows * cols:
+        if m >= out.shape[0]:
+            grown = np.empty(2 * out.shape[0], np.int64)
+            grown[:m] = out[:m]
+            out = grown
+        out[m] = cur
+        m += 1
+        if cur == start:
+            break
+        r = cur // cols
+        c = cur - r * cols
+        best = -1
+        bestv = np.inf
+        for k in range(8):
+            pr, pc = _neighbour(r, c, k)
+            if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
+                continue
+            p = pr * cols + pc
+            if rec[2 * p] != done:
+                continue
+            v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
+            if v < bestv:
+                bestv = v
+                best = p
+        if best < 0:
+            break
+        cur = best
+    return out[:m][::-1].copy()
 
 
 @njit(cache=True)

@@ -26,7 +26,7 @@ class PlannerConfig:
     smooth_path: bool = True
     smoothing_slack: float = 0.02       # a shortcut may cost this fraction more than the sub-path it replaces
     escape_radius: float = 0.35         # m: how far a start inside the inscribed band may move through it
-    heuristic_weight: float = 1.25      # weighted A*: cost ≤ 1.25 × optimal (measured median 1.03–1.06); ~5x fewer expansions
+    heuristic_weight: float = 1.25      # weighted A*: cost ≤ 1.25 × optimal (median 1.03–1.06); ~5x fewer expansions
 
 
 @dataclass
@@ -37,6 +37,22 @@ class PlanResult:
     cost: float = 0.0                   # A* cost (cells × traversal factor)
     length: float = 0.0                 # m, of the returned path
     expansions: int = 0
+
+
+class _Search:
+    """One plan's search inputs, shared by the kernels it calls."""
+
+    def __init__(self, costs: NDArray[np.uint8], table: NDArray[np.float64], start: int, rec: NDArray[np.int32],
+                 escape_cells: float, esc_cost: float) -> None:
+        self.costs, self.table, self.start, self.rec = costs, table, start, rec
+        self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
+        self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
+
+    def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
+        cells = _search.backtrack(self.costs, self.table, self.rec, stamp, self.start, cell, self.esc_r2,
+                                  self.esc_cost)
+        return cells, self.rec.view(np.float32)[2 * cells + 1].astype(np.float64)
 
 
 class GlobalPlanner:
@@ -56,14 +72,16 @@ class GlobalPlanner:
         return t
 
     def _buffers(self, n: int) -> None:
+        """An 8-byte search record per cell (see ``_search``), reused between plans via stamps."""
         if n != self._size:
-            self._g = np.empty(n, np.float32)
-            self._parent = np.empty(n, np.int32)
-            self._state = np.zeros(n, np.int32)
+            self._rec = np.zeros(2 * n, np.int32)
             self._size, self._stamp = n, 0
+        self._next_stamp()
+
+    def _next_stamp(self) -> None:
         self._stamp += 1
         if self._stamp >= 2**30 - 2:
-            self._state[:] = 0
+            self._rec[:] = 0
             self._stamp = 1
 
     def plan(self, costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]) -> PlanResult:
@@ -79,9 +97,6 @@ class GlobalPlanner:
             return PlanResult(False, reason=f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is off the costmap")
         table = self.traversal_table()
         self._buffers(rows * cols)
-        stamp = self._stamp
-        esc_cells = self.cfg.escape_radius / res
-        esc_cost = 1.0 + self.cfg.cost_travel_multiplier * 2.0
         s_flat, g_flat = sr * cols + sc, gr * cols + gc
         target = g_flat
         candidates = self._goal_candidates(costs, table, gr, gc, res)
@@ -89,21 +104,23 @@ class GlobalPlanner:
             if len(candidates) == 0:
                 return PlanResult(False, reason=self._blocked_reason(costs[gr, gc], goal))
             target = int(candidates[0])
-        found, expansions = _search.astar(costs, table, s_flat, target, self._g, self._parent, self._state,
-                                          stamp, esc_cells * esc_cells, esc_cost, self.cfg.heuristic_weight)
-        if not found:
-            # The failed search closed the start's whole component: take the nearest closed candidate.
-            reach = [int(c) for c in candidates if self._state[c] == 2 * stamp + 1] if len(candidates) else []
+        search = _Search(costs, table, s_flat, self._rec, self.cfg.escape_radius / res,
+                         1.0 + self.cfg.cost_travel_multiplier * 2.0)
+        cells, gvals, expansions = self._search(search, target)
+        if cells is None:
+            # The failed one-sided search closed the start's whole component: take the nearest closed candidate.
+            closed = 2 * self._stamp + 1
+            reach = [int(c) for c in candidates if self._rec[2 * c] == closed] if len(candidates) else []
             if not reach:
                 why = self._blocked_reason(costs[gr, gc], goal) if not np.isfinite(table[costs[gr, gc]]) else (
                     f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is not reachable from the start "
                     f"(searched {expansions} cells, tolerance {self.cfg.tolerance:.2f} m)")
                 return PlanResult(False, reason=f"no path: {why}", expansions=expansions)
             target = reach[0]
-        cells = _search.backtrack(self._parent, target).astype(np.int64)
-        total = float(self._g[target])
+            cells, gvals = search.forward_path(self._stamp, target)
+        total = float(gvals[-1])
         if self.cfg.smooth_path and len(cells) > 2:
-            keep = _search.shortcut(costs, table, cells, self._g[cells], self.cfg.smoothing_slack)
+            keep = _search.shortcut(costs, table, cells, gvals, self.cfg.smoothing_slack)
             cells = cells[keep]
         x, y = costmap.cell_to_world(cells % cols, cells // cols)
         pts = np.stack([x, y], axis=1)
@@ -113,6 +130,16 @@ class GlobalPlanner:
         dense = densify(pts, res)
         length = float(np.sum(np.hypot(*np.diff(dense, axis=0).T))) if len(dense) > 1 else 0.0
         return PlanResult(True, dense, "", total, length, expansions)
+
+    def _search(self, search: _Search, target: int) -> tuple[NDArray | None, NDArray, int]:
+        """(cells start..target, g along them, expansions), or cells None when the target is unreachable
+        (then every cell reachable from the start is closed)."""
+        found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec, self._stamp,
+                                          search.esc_r2, search.esc_cost, self.cfg.heuristic_weight, search.h_scale)
+        if not found:
+            return None, np.zeros(0), expansions
+        cells, gvals = search.forward_path(self._stamp, target)
+        return cells, gvals, expansions
 
     def _goal_candidates(self, costs: NDArray[np.uint8], table: NDArray, gr: int, gc: int, res: float) -> NDArray:
         """Traversable cells within ``tolerance`` of the goal cell, nearest first (flat indices)."""
