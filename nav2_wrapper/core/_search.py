@@ -88,13 +88,13 @@ def _move_cost(flat, table, cols, fr, fc, tr, tc, sr, sc, esc_r2, esc_cost):
     length; cells within sqrt(esc_r2) of the start (sr, sc) are passable at ``esc_cost`` even when blocked;
     no diagonal squeeze between two blocked orthogonal cells (outside that escape disc). inf = not allowed."""
     f = table[flat[tr * cols + tc]]
-    near = (tr - sr) * (tr - sr) + (tc - sc) * (tc - sc) <= esc_r2
     if f == np.inf:
-        if not near:
+        if (tr - sr) * (tr - sr) + (tc - sc) * (tc - sc) > esc_r2:
             return np.inf
         f = esc_cost
     if fr != tr and fc != tc:
-        if not near and table[flat[fr * cols + tc]] == np.inf and table[flat[tr * cols + fc]] == np.inf:
+        if (table[flat[fr * cols + tc]] == np.inf and table[flat[tr * cols + fc]] == np.inf
+                and (tr - sr) * (tr - sr) + (tc - sc) * (tc - sc) > esc_r2):
             return np.inf
         return SQRT2 * f
     return f
@@ -165,6 +165,88 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
                 recg[2 * nb + 1] = ng
                 heap = _grow(heap, n)
                 n = _hpush(heap, n, _pack(ng + hw * _octile(nr, nc, gr, gc), nb))
+    return False, expansions
+
+
+@njit(cache=True)
+def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
+    """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
+
+    With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
+    by at most (max step + √2·h_scale), so the open cells always fall into a sliding window of
+    ``nbuckets`` buckets of width ``delta`` (a ring). Push and pop are O(1), no sifting. Inside a bucket the
+    order is first in, first out, so a cell may be expanded before its best g is known; it is
+    then simply re-opened when the better g arrives (label correcting inside the bucket). Once a bucket is
+    empty every cell with f in it has its final g, because anything cheaper would have come through a
+    cell with a smaller f, all of which are done. The goal's g is exact after its bucket is emptied.
+    Same record layout and return value as ``astar``; on failure every cell reachable from the start is
+    closed.
+    """
+    rows, cols = costs.shape
+    flat = costs.ravel()
+    recg = rec.view(np.float32)
+    sr, sc = start // cols, start % cols
+    gr, gc = goal // cols, goal % cols
+    seen = 2 * stamp
+    done = seen + 1
+    inv = 1.0 / delta
+    mask = nbuckets - 1
+    cap = 1024
+    buckets = np.empty((nbuckets, cap), np.int32)
+    counts = np.zeros(nbuckets, np.int64)
+    heads = np.zeros(nbuckets, np.int64)
+    recg[2 * start + 1] = 0.0
+    rec[2 * start] = seen
+    cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
+    buckets[cb & mask, 0] = start
+    counts[cb & mask] = 1
+    total = 1
+    expansions = 0
+    while total > 0:
+        b = cb & mask
+        while heads[b] < counts[b]:
+            cur = buckets[b, heads[b]]
+            heads[b] += 1
+            total -= 1
+            if rec[2 * cur] != seen:
+                continue            # closed already at this g (a duplicate entry)
+            r = cur // cols
+            c = cur - r * cols
+            gcur = np.float64(recg[2 * cur + 1])
+            rec[2 * cur] = done
+            expansions += 1
+            for k in range(8):
+                nr, nc = _neighbour(r, c, k)
+                if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
+                    continue
+                nb = nr * cols + nc
+                st = rec[2 * nb]
+                if st != seen and st != done:
+                    step = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+                    if step == np.inf:
+                        continue
+                    ng = gcur + step
+                else:
+                    step = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+                    ng = gcur + step
+                    if not ng < recg[2 * nb + 1]:
+                        continue
+                rec[2 * nb] = seen
+                recg[2 * nb + 1] = ng
+                nbk = max(int((ng + h_scale * _octile(nr, nc, gr, gc)) * inv), cb)
+                j = nbk & mask
+                if counts[j] >= buckets.shape[1]:
+                    grown = np.empty((nbuckets, 2 * buckets.shape[1]), np.int32)
+                    grown[:, :buckets.shape[1]] = buckets
+                    buckets = grown
+                buckets[j, counts[j]] = nb
+                counts[j] += 1
+                total += 1
+        heads[b] = 0
+        counts[b] = 0
+        if rec[2 * goal] == done:
+            return True, expansions
+        cb += 1
     return False, expansions
 
 

@@ -16,6 +16,8 @@ from . import _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 
+BUCKET_WIDTH = 0.25   # f range of one bucket of the cost-optimal search's queue (cells × traversal factor)
+
 
 @dataclass
 class PlannerConfig:
@@ -47,6 +49,12 @@ class _Search:
         self.costs, self.table, self.start, self.rec = costs, table, start, rec
         self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
         self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
+
+    def ring_size(self, width: float) -> int:
+        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale."""
+        finite = self.table[np.isfinite(self.table)]
+        step = math.sqrt(2.0) * (max(float(finite.max()) if len(finite) else 1.0, self.esc_cost) + self.h_scale)
+        return 1 << max(3, int(math.ceil(math.log2(step / width + 3))))
 
     def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
@@ -134,8 +142,14 @@ class GlobalPlanner:
     def _search(self, search: _Search, target: int) -> tuple[NDArray | None, NDArray, int]:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
-        found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec, self._stamp,
-                                          search.esc_r2, search.esc_cost, self.cfg.heuristic_weight, search.h_scale)
+        if self.cfg.heuristic_weight == 1.0:
+            found, expansions = _search.astar_buckets(search.costs, search.table, search.start, target, self._rec,
+                                                      self._stamp, search.esc_r2, search.esc_cost, search.h_scale,
+                                                      BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
+        else:
+            found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec,
+                                              self._stamp, search.esc_r2, search.esc_cost, self.cfg.heuristic_weight,
+                                              search.h_scale)
         if not found:
             return None, np.zeros(0), expansions
         cells, gvals = search.forward_path(self._stamp, target)
