@@ -97,7 +97,7 @@ def _table(rows: list[dict]) -> dict:
                "recoveries": sum(r["recoveries"] for r in rows),
                "path_ratio_median": statistics.median(
                    [x["path_ratio"] for r in rows for x in r["results"]
-                    if x["state"] == "SUCCEEDED" and math.isfinite(x["path_ratio"])] or [math.nan]),
+                    if x["succeeded"] and math.isfinite(x["path_ratio"])] or [math.nan]),
                "plan_ms_median": statistics.median(r["plan_ms_median"] for r in rows)}
     print(f"{'scene':<10} {'succ':>6} {'coll':>4} {'in tol':>6} {'t med s':>7} {'path/short':>10} "
           f"{'max':>5} {'plan ms':>7} {'rec':>3} {'x RT':>5}")

@@ -26,7 +26,7 @@ from rbnx.demo_goalrun import GoalRunner
 from rbnx.demo_goals import Goal, choose_goals, fmt_s
 from rbnx.demo_live import DemoLive
 from rbnx.demo_record import Recorder, render_map
-from rbnx.demo_report import GoalResult, LiveLine, print_table, write_json
+from rbnx.demo_report import GoalResult, LiveLine, goals_exit_code, print_table, write_json
 from rbnx.demo_rpc import DemoRpc
 from robonix_nav_data import resources
 
@@ -80,6 +80,22 @@ def resolve_scene(scene: str) -> str:
                      "random:<seed>, or a scene YAML file")
 
 
+def check_scene_goals(scene: str) -> None:
+    """A ``random:N`` scene is generated here (deterministically, as the simulator will) so that one whose
+    waypoints all lie within MIN_GOAL_DIST_M of the start is refused before anything is booted."""
+    if not scene.startswith("random"):
+        return
+    from hal_panda_mobile.sim import SimConfigError, random_scene
+
+    try:
+        s = random_scene(seed=int(scene.partition(":")[2] or 0))
+    except SimConfigError as exc:
+        raise UsageError(f"--scene {scene}: {exc}") from exc
+    if not choose_goals(dict(s.waypoints), (s.start.x, s.start.y), 1, None, MIN_GOAL_DIST_M):
+        raise UsageError(f"--scene {scene}: no waypoint farther than {MIN_GOAL_DIST_M:g} m from the start "
+                         "(nothing to navigate to); pick another seed")
+
+
 def resolve_deploy(arg: str | None) -> Path:
     if arg:
         p = Path(arg)
@@ -104,6 +120,7 @@ def _check_args(args: argparse.Namespace) -> tuple[Path, str, Path]:
     if not deploy.is_file():
         raise UsageError(f"deploy file {deploy} not found (pass --deploy)")
     scene = resolve_scene(args.scene)
+    check_scene_goals(scene)
     out = Path(args.out) if args.out else Path("rbnx-demo") / time.strftime("%Y%m%d-%H%M%S")
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out: {out} exists and is not a directory")
@@ -212,7 +229,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
                 if stop.event.is_set():
                     break
                 results.append(runner.run(GoalResult(i, g), len(goals)))
-            code = 0 if len(results) == len(goals) and all(r.succeeded for r in results) else 1
+            code = goals_exit_code(results, len(goals))
         except DemoError as exc:
             line.done(f"rbnx demo: {exc}")
             for ln in exc.lines:

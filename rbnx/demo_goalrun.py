@@ -68,7 +68,9 @@ class GoalRunner:
         res.duration_wall_s = time.monotonic() - t0
         self._measure(res, gt0, gt_mark, plan_mark)
         err = f", {res.final_error_m:.2f} m from target" if res.final_error_m is not None else ""
-        self.line.done(f"{tag}: {res.state} in {fmt_s(res.duration_sim_s)} sim / {fmt_s(res.duration_wall_s)} "
+        if res.collisions:
+            err += f", {len(res.collisions)} contact(s): failed"
+        self.line.done(f"{tag}: {res.outcome} in {fmt_s(res.duration_sim_s)} sim / {fmt_s(res.duration_wall_s)} "
                        f"wall{err} — {res.detail}")
         return res
 

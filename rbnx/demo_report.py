@@ -74,8 +74,19 @@ class GoalResult:
     plan: Any = field(default=None, repr=False, compare=False)  # (N, 2) map-frame route, for map.png only
 
     @property
-    def succeeded(self) -> bool:
+    def reached(self) -> bool:
+        """Navigation reported the goal reached (contacts aside)."""
         return self.state == "SUCCEEDED"
+
+    @property
+    def succeeded(self) -> bool:
+        """Reached without touching anything: a contact during the goal fails it, whatever nav reported."""
+        return self.reached and not self.collisions
+
+    @property
+    def outcome(self) -> str:
+        """The state shown to people: nav's state, or CONTACT when it reached the goal by hitting something."""
+        return "CONTACT" if self.reached and self.collisions else self.state
 
     def as_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -90,8 +101,16 @@ class GoalResult:
             d["final_pose"] = {"x": round(d["final_pose"][0], 3), "y": round(d["final_pose"][1], 3),
                                "theta": round(d["final_pose"][2], 3), "frame": "world (ground truth)"}
         d["collision_count"] = len(d["collisions"])
+        d["reached"] = self.reached
         d["succeeded"] = self.succeeded
+        if self.reached and self.collisions:
+            d["failure"] = "contact with " + ", ".join(sorted({str(c.get("other_geom", "?")) for c in self.collisions}))
         return d
+
+
+def goals_exit_code(results: list[GoalResult], n_planned: int) -> int:
+    """0 only when every planned goal ran and succeeded (a goal reached with a contact did not), else 1."""
+    return 0 if len(results) == n_planned and all(r.succeeded for r in results) else 1
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
@@ -109,8 +128,10 @@ def print_table(results: list[GoalResult], n_planned: int, stream: TextIO | None
     for r in results:
         g = r.goal
         err = f"{r.final_error_m:.2f}m" if r.final_error_m is not None else "-"
-        print(f"{r.index:>2}  {g.name[:16]:<16} {f'({g.x:.2f}, {g.y:.2f})':<14} {r.state:<10} "
+        print(f"{r.index:>2}  {g.name[:16]:<16} {f'({g.x:.2f}, {g.y:.2f})':<14} {r.outcome:<10} "
               f"{fmt_s(r.duration_sim_s):>8} {fmt_s(r.duration_wall_s):>8} {r.path_length_m:>6.2f}m "
               f"{err:>6} {len(r.collisions):>4}", file=out)
     ok = sum(r.succeeded for r in results)
-    print(f"{ok}/{n_planned} goals succeeded", file=out, flush=True)
+    hit = sum(r.reached and not r.succeeded for r in results)
+    print(f"{ok}/{n_planned} goals succeeded" + (f" ({hit} reached with a contact: failed)" if hit else ""),
+          file=out, flush=True)

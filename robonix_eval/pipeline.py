@@ -79,8 +79,14 @@ class GoalResult:
     final_speed: float = 0.0  # m/s ground truth after settling
 
     @property
-    def succeeded(self) -> bool:
+    def reached(self) -> bool:
+        """Navigation reported the goal reached (contacts aside)."""
         return self.state == "SUCCEEDED"
+
+    @property
+    def succeeded(self) -> bool:
+        """Reached without touching anything: a contact during the goal fails it in every suite's score."""
+        return self.reached and self.collisions == 0
 
     @property
     def path_ratio(self) -> float:
@@ -90,6 +96,8 @@ class GoalResult:
         d = {k: v for k, v in self.__dict__.items() if k != "plan_times"}
         d["plan_ms_median"] = 1e3 * statistics.median(self.plan_times) if self.plan_times else math.nan
         d["path_ratio"] = self.path_ratio
+        d["reached"] = self.reached
+        d["succeeded"] = self.succeeded
         return d
 
 

@@ -3,12 +3,14 @@ and nav-detail parsing behave as the live view and summary rely on."""
 
 from __future__ import annotations
 
+import io
 import subprocess
 from pathlib import Path
 
 import pytest
 
-from rbnx.demo_goals import choose_goals, parse_detail, path_length
+from rbnx.demo_goals import Goal, choose_goals, parse_detail, path_length
+from rbnx.demo_report import GoalResult, goals_exit_code, print_table
 
 from .conftest import e2e_env, rbnx_cmd
 
@@ -20,13 +22,15 @@ KITCHEN = {"island_east": [5.8, 3.0], "pantry": [8.3, 6.8], "dining": [2.5, 6.2]
     (["--deploy", "missing.yaml"], "missing.yaml not found"),
     (["--goals", "0"], "--goals"),
     (["--rtf", "-1"], "--rtf"),
+    (["--scene", "random:23"], "no waypoint farther than 1 m"),   # its only waypoint is the start
 ])
 def test_demo_usage_errors_exit_2_and_start_nothing(tmp_path: Path, args: list[str], message: str) -> None:
     r = subprocess.run(rbnx_cmd() + ["demo", *args, "--out", str(tmp_path / "out")], env=e2e_env(tmp_path),
                        cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stdout + r.stderr
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], r.stderr
+    assert len(lines) == 1, r.stderr
+    assert message in lines[0], r.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -55,3 +59,28 @@ def test_parse_detail_reads_the_nav_status_line() -> None:
 def test_path_length() -> None:
     assert path_length([(0, 0), (3, 4), (3, 5)]) == pytest.approx(6.0)
     assert path_length([(1, 1)]) == 0.0
+
+
+def _contact() -> dict:
+    return {"sim_time": 12.5, "robot_geom": "base", "other_geom": "wall_5", "x": 1.0, "y": 2.0}
+
+
+def test_a_goal_reached_with_a_contact_is_a_failure_in_summary_table_and_exit_code() -> None:
+    clean = GoalResult(1, Goal("a", 1.0, 1.0), state="SUCCEEDED")
+    hit = GoalResult(2, Goal("b", 3.0, 1.0), state="SUCCEEDED", collisions=[_contact()])
+    assert clean.succeeded
+    assert hit.reached
+    assert not hit.succeeded
+    assert hit.outcome == "CONTACT"
+    d = hit.as_dict()
+    assert (d["reached"], d["succeeded"], d["collision_count"]) == (True, False, 1)
+    assert d["failure"] == "contact with wall_5"
+    assert "failure" not in clean.as_dict()
+    assert goals_exit_code([clean], 1) == 0
+    assert goals_exit_code([clean, hit], 2) == 1
+    assert goals_exit_code([clean], 2) == 1               # a goal that never ran is not a success either
+    out = io.StringIO()
+    print_table([clean, hit], 2, out)
+    text = out.getvalue()
+    assert "CONTACT" in text
+    assert "1/2 goals succeeded (1 reached with a contact: failed)" in text
