@@ -168,19 +168,41 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
     return False, expansions
 
 
+@njit(cache=True, inline="always")
+def _relax(rec, recg, nb, ng, seen, key, buckets, counts):
+    """Give cell ``nb`` g = ``ng`` if that is better, appending it to bucket ``key`` (ring slot); returns
+    that bucket's new length, 0 if nothing changed. The caller guarantees room in the bucket."""
+    if rec[2 * nb] >= seen and not ng < recg[2 * nb + 1]:   # seen or closed in this plan, and no better
+        return 0
+    rec[2 * nb] = seen
+    recg[2 * nb + 1] = ng
+    n = counts[key]
+    buckets[key, n] = nb
+    counts[key] = n + 1
+    return n + 1
+
+
+@njit(cache=True, inline="always")
+def _key(g, h, inv, cb, mask):
+    """Ring slot of f = g + h (never below the current bucket: float rounding only)."""
+    return max(int((g + h) * inv), cb) & mask
+
+
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
     by at most (max step + √2·h_scale), so the open cells always fall into a sliding window of
-    ``nbuckets`` buckets of width ``delta`` (a ring). Push and pop are O(1), no sifting. Inside a bucket the
-    order is first in, first out, so a cell may be expanded before its best g is known; it is
-    then simply re-opened when the better g arrives (label correcting inside the bucket). Once a bucket is
-    empty every cell with f in it has its final g, because anything cheaper would have come through a
-    cell with a smaller f, all of which are done. The goal's g is exact after its bucket is emptied.
-    Same record layout and return value as ``astar``; on failure every cell reachable from the start is
-    closed.
+    ``nbuckets`` buckets of width ``delta`` (a ring of FIFO arrays). Push and pop are O(1), no sifting.
+    Inside a bucket the order is first in, first out, so a cell may be expanded before its best g is
+    known; it is then re-opened when the better g arrives (label correcting inside the bucket). Once a
+    bucket is empty every cell with f in it has its final g, because anything cheaper would come through
+    a cell with a smaller f, all of which are done; the goal's g is exact once its bucket is emptied.
+    Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
+    fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
+    diagonal-squeeze test. Same record layout and return value as ``astar``; on failure every cell
+    reachable from the start is closed.
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -191,57 +213,66 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     done = seen + 1
     inv = 1.0 / delta
     mask = nbuckets - 1
-    cap = 1024
-    buckets = np.empty((nbuckets, cap), np.int32)
+    buckets = np.empty((nbuckets, 1024), np.int32)
     counts = np.zeros(nbuckets, np.int64)
     heads = np.zeros(nbuckets, np.int64)
-    recg[2 * start + 1] = 0.0
-    rec[2 * start] = seen
+    rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    buckets[cb & mask, 0] = start
-    counts[cb & mask] = 1
-    total = 1
+    fullest = _relax(rec, recg, start, 0.0, seen, cb & mask, buckets, counts)
+    pending = 1
+    far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
+    # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
+    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
+    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
+    offs = drs * cols + dcs
+    fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
     expansions = 0
-    while total > 0:
+    while pending > 0:
         b = cb & mask
         while heads[b] < counts[b]:
             cur = buckets[b, heads[b]]
             heads[b] += 1
-            total -= 1
+            pending -= 1
             if rec[2 * cur] != seen:
                 continue            # closed already at this g (a duplicate entry)
+            rec[2 * cur] = done
+            expansions += 1
+            if fullest + 8 > buckets.shape[1]:
+                grown = np.empty((nbuckets, 2 * buckets.shape[1]), np.int32)
+                grown[:, :buckets.shape[1]] = buckets
+                buckets = grown
             r = cur // cols
             c = cur - r * cols
             gcur = np.float64(recg[2 * cur + 1])
-            rec[2 * cur] = done
-            expansions += 1
-            for k in range(8):
-                nr, nc = _neighbour(r, c, k)
-                if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
-                    continue
-                nb = nr * cols + nc
-                st = rec[2 * nb]
-                if st != seen and st != done:
-                    step = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-                    if step == np.inf:
+            if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
+                for k in range(4):
+                    fo[k] = table[flat[cur + offs[k]]]
+                for k in range(8):
+                    if k < 4:
+                        f = fo[k]
+                    elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
+                        continue    # no squeeze between two blocked orthogonal cells
+                    else:
+                        f = SQRT2 * table[flat[cur + offs[k]]]
+                    if f == np.inf:
                         continue
-                    ng = gcur + step
-                else:
-                    step = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-                    ng = gcur + step
-                    if not ng < recg[2 * nb + 1]:
+                    n = _relax(rec, recg, cur + offs[k], gcur + f, seen,
+                               _key(gcur + f, h_scale * _octile(r + drs[k], c + dcs[k], gr, gc), inv, cb, mask),
+                               buckets, counts)
+                    pending += n > 0
+                    fullest = max(fullest, n)
+            else:
+                for k in range(8):
+                    nr, nc = r + drs[k], c + dcs[k]
+                    if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
                         continue
-                rec[2 * nb] = seen
-                recg[2 * nb + 1] = ng
-                nbk = max(int((ng + h_scale * _octile(nr, nc, gr, gc)) * inv), cb)
-                j = nbk & mask
-                if counts[j] >= buckets.shape[1]:
-                    grown = np.empty((nbuckets, 2 * buckets.shape[1]), np.int32)
-                    grown[:, :buckets.shape[1]] = buckets
-                    buckets = grown
-                buckets[j, counts[j]] = nb
-                counts[j] += 1
-                total += 1
+                    f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+                    if f == np.inf:
+                        continue
+                    n = _relax(rec, recg, nr * cols + nc, gcur + f, seen,
+                               _key(gcur + f, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask), buckets, counts)
+                    pending += n > 0
+                    fullest = max(fullest, n)
         heads[b] = 0
         counts[b] = 0
         if rec[2 * goal] == done:
