@@ -169,23 +169,35 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
 
 
 @njit(cache=True, inline="always")
-def _relax(rec, recg, nb, ng, seen, key, buckets, counts):
-    """Give cell ``nb`` g = ``ng`` if that is better, appending it to bucket ``key`` (ring slot); returns
-    that bucket's new length, 0 if nothing changed. The caller guarantees room in the bucket."""
-    if rec[2 * nb] >= seen and not ng < recg[2 * nb + 1]:   # seen or closed in this plan, and no better
-        return 0
-    rec[2 * nb] = seen
-    recg[2 * nb + 1] = ng
+def _key(g, h, inv, cb, mask):
+    """Ring slot of f = g + h (never below the current bucket: float rounding only)."""
+    return max(int((g + h) * inv), cb) & mask
+
+
+@njit(cache=True, inline="always")
+def _relax(rec, recg, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
+    """Give cell ``nb`` = (nr, nc) g = ``ng`` if that is better, appending it to the bucket of its f (the
+    heuristic is only computed then: most relaxations fail). Returns that bucket's new length, 0 if nothing
+    changed. The caller guarantees room in the bucket."""
+    st = rec[2 * nb]
+    if st >= seen:                  # seen or closed in this plan
+        old = np.float64(recg[2 * nb + 1])
+        if not ng < old:
+            return 0
+        rec[2 * nb] = seen
+        recg[2 * nb + 1] = ng
+        h = h_scale * _octile(nr, nc, gr, gc)
+        key = _key(ng, h, inv, cb, mask)
+        if st == seen and _key(old, h, inv, cb, mask) == key:
+            return 0                # its open entry is already in that bucket and reads the new g when popped
+    else:
+        rec[2 * nb] = seen
+        recg[2 * nb + 1] = ng
+        key = _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
     n = counts[key]
     buckets[key, n] = nb
     counts[key] = n + 1
     return n + 1
-
-
-@njit(cache=True, inline="always")
-def _key(g, h, inv, cb, mask):
-    """Ring slot of f = g + h (never below the current bucket: float rounding only)."""
-    return max(int((g + h) * inv), cb) & mask
 
 
 @njit(cache=True)
@@ -218,7 +230,7 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     heads = np.zeros(nbuckets, np.int64)
     rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    fullest = _relax(rec, recg, start, 0.0, seen, cb & mask, buckets, counts)
+    fullest = _relax(rec, recg, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
     pending = 1
     far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
     # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
@@ -256,9 +268,8 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
                         f = SQRT2 * table[flat[cur + offs[k]]]
                     if f == np.inf:
                         continue
-                    n = _relax(rec, recg, cur + offs[k], gcur + f, seen,
-                               _key(gcur + f, h_scale * _octile(r + drs[k], c + dcs[k], gr, gc), inv, cb, mask),
-                               buckets, counts)
+                    n = _relax(rec, recg, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc, h_scale,
+                               inv, cb, mask, buckets, counts)
                     pending += n > 0
                     fullest = max(fullest, n)
             else:
@@ -269,8 +280,8 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
                     f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
                     if f == np.inf:
                         continue
-                    n = _relax(rec, recg, nr * cols + nc, gcur + f, seen,
-                               _key(gcur + f, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask), buckets, counts)
+                    n = _relax(rec, recg, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask,
+                               buckets, counts)
                     pending += n > 0
                     fullest = max(fullest, n)
         heads[b] = 0
