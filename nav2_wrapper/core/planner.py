@@ -16,7 +16,10 @@ from . import _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 
-BUCKET_WIDTH = 0.25   # f range of one bucket of the cost-optimal search's queue (cells × traversal factor)
+# f range of one bucket of the cost-optimal search's queue (cells × traversal factor). Wider buckets mean fewer
+# bucket switches but more cells expanded before their final g; 1.0 was fastest of 0.1-4 on the bench maps
+# (13 % less time than 0.25, 3 % more expansions).
+BUCKET_WIDTH = 1.0
 
 
 @dataclass
