@@ -200,6 +200,16 @@ def _relax(rec, recg, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buck
     return n + 1
 
 
+@njit(cache=True, inline="always")
+def _room(buckets, need):
+    """The bucket ring with room for ``need`` entries per bucket (doubled when short)."""
+    if need <= buckets.shape[1]:
+        return buckets
+    grown = np.empty((buckets.shape[0], 2 * buckets.shape[1]), np.int32)
+    grown[:, :buckets.shape[1]] = buckets
+    return grown
+
+
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
@@ -249,10 +259,7 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
                 continue            # closed already at this g (a duplicate entry)
             rec[2 * cur] = done
             expansions += 1
-            if fullest + 8 > buckets.shape[1]:
-                grown = np.empty((nbuckets, 2 * buckets.shape[1]), np.int32)
-                grown[:, :buckets.shape[1]] = buckets
-                buckets = grown
+            buckets = _room(buckets, fullest + 8)
             r = cur // cols
             c = cur - r * cols
             gcur = np.float64(recg[2 * cur + 1])
