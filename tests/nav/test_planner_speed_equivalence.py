@@ -135,3 +135,23 @@ def test_unreachable_goal_fails_with_reason_and_blocked_goal_uses_tolerance() ->
     r = planner.plan(cm, (0.3, 1.0), (1.35, 1.0))   # in the wall's inscribed band, free cells within 0.2 m
     assert r.ok, r.reason
     assert cm.cost_at(r.path[-1:, 0], r.path[-1:, 1])[0] < INSCRIBED
+
+
+def test_start_equals_goal_and_starts_on_the_map_edge() -> None:
+    rng = np.random.default_rng(5)
+    cm = random_costmap(rng, boxes=4)
+    planner = GlobalPlanner(PlannerConfig(heuristic_weight=1.0))
+    free = np.argwhere(cm.costs < INSCRIBED)
+    a = free[len(free) // 2]
+    r = planner.plan(cm, centre(cm, a), centre(cm, a))
+    assert r.ok, r.reason
+    assert r.cost == 0.0
+    edge = free[(free[:, 0] == 0) | (free[:, 1] == 0)]
+    assert len(edge), "no free cell on the map edge"
+    table = planner.traversal_table()
+    for e in edge[:: max(1, len(edge) // 4)]:
+        want = reference_cost(cm.costs, table, (int(e[0]), int(e[1])), (int(a[0]), int(a[1])), 49.0, 5.0)
+        if math.isfinite(want):       # (an unreachable goal may still be met within tolerance)
+            got = planner.plan(cm, centre(cm, e), centre(cm, a))
+            assert got.ok, got.reason
+            assert got.cost == pytest.approx(want, rel=1e-5)
