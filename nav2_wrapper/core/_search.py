@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 SQRT2 = math.sqrt(2.0)
+STRAIGHT_TOL = 2e-7   # relative: a step within this of the cheapest counts as tying with it (float32 g)
 TIE_EPS = 1e-6
 """Relative weight added to h so that, among equal f = g + h, the node nearer the goal (larger g) pops first.
 
@@ -305,7 +306,8 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
 
     Each step goes back to the closed neighbour whose g plus the move cost is smallest: that is the
     neighbour the search relaxed the cell from (or one tying with it), so the path's cost is the search's
-    g. g drops by at least 1 per step, so the walk ends at the start (g = 0).
+    g; among ties the one straight ahead wins. g drops by at least 1 per step, so the walk ends at the
+    start (g = 0).
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -328,6 +330,9 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
         c = cur - r * cols
         best = -1
         bestv = np.inf
+        straight = -1               # the neighbour that keeps the last step's direction
+        straightv = np.inf
+        ahead = cur + (cur - out[m - 2]) if m >= 2 else -1
         for k in range(8):
             pr, pc = _neighbour(r, c, k)
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
@@ -339,9 +344,13 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             if v < bestv:
                 bestv = v
                 best = p
+            if p == ahead:
+                straight, straightv = p, v
         if best < 0:
             break
-        cur = best
+        # Equal-cost alternatives differ only by float32 rounding of g: among them keep going straight, so the
+        # path has as few turns as its cost allows whatever order the search closed cells in.
+        cur = straight if straight >= 0 and straightv <= bestv * (1.0 + STRAIGHT_TOL) else best
     return out[:m][::-1].copy()
 
 
