@@ -30,11 +30,11 @@ from nav2_wrapper.core import (
     ControllerConfig,
     Costmap,
     CostmapConfig,
-    Footprint,
     GlobalPlanner,
     HolonomicController,
     PlannerConfig,
 )
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
 RES = 0.05
@@ -77,7 +77,7 @@ def pick_pairs(cm: Costmap, n: int, rng: np.random.Generator) -> list[tuple[tupl
 
 def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float], steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     local = Costmap(CostmapConfig(name="local", rolling_window=True, width=4.0, height=4.0, obstacle_layer=False,
                                   cost_scaling_factor=3.0, inflation_radius=0.55, footprint=fp))
     grid = GridMap(np.where(cm.static == 254, 100, 0).astype(np.int8), RES)
@@ -107,7 +107,7 @@ def main() -> None:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--no-exact", action="store_true", help="skip the exact-optimum comparison (faster)")
     args = ap.parse_args()
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     planner = GlobalPlanner(PlannerConfig(heuristic_weight=args.weight))
     exact = GlobalPlanner(PlannerConfig(heuristic_weight=1.0, smooth_path=False))
     results: dict = {"machine": platform.processor() or platform.machine(), "pairs": args.pairs,

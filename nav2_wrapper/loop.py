@@ -14,6 +14,7 @@ the run after ``clock_timeout_s``.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import threading
@@ -265,10 +266,8 @@ class NavLoop:
         log.info("run %s %s: %s", rec.run_id, rec.state, reason)
 
     def publish_zero(self) -> None:
-        try:
+        with contextlib.suppress(RuntimeError):  # closed during teardown
             self.pubs.cmd_vel.publish(twist(0.0, 0.0, 0.0))
-        except RuntimeError:  # closed during teardown
-            pass
         self._moving = False
 
     # ---- the loop ----------------------------------------------------------------------------------

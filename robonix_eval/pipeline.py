@@ -26,7 +26,7 @@ from hal_panda_mobile.sim import (
     load_robot_description,
     load_scene,
 )
-from nav2_wrapper.core import Command, LaserScan, Navigator
+from nav2_wrapper.core import Command, Navigator, RangeScan
 from nav2_wrapper.core.navigator import TERMINAL
 from nav2_wrapper.params import load_params
 from robonix_common.geometry import compose
@@ -200,7 +200,7 @@ class Pipeline:
                                    self.mount, s.frame_id), (odom.x, odom.y, odom.yaw), s.stamp)
         self.map_to_odom = (float(u.map_to_odom[0]), float(u.map_to_odom[1]), float(u.map_to_odom[2]))
         self._map_dirty |= u.map_changed
-        self._scan = LaserScan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        self._scan = RangeScan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
         base = (compose(self.map_to_odom, (odom.x, odom.y, odom.yaw)) if self.options.nav_map == "slam"
                 else self.ground_truth_pose())
         sp = compose(base, self.mount)

@@ -1,0 +1,193 @@
+"""Which YAML key of a Nav2 params profile sets which core parameter: one table per node and plugin.
+
+A key that sets a core field takes its type, default, unit, range and doc from the field's declaration
+(``core.schema.param``), so they are written once, in the core. The few keys the wrapper reads itself
+(topics, plugin lists, the footprint string) and the keys accepted only for Nav2 compatibility are
+declared here, once. ``nav2_wrapper.params`` validates and builds from these tables, and
+``nav2_wrapper.paramdoc`` renders them as the parameter reference in CAPABILITY.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
+from .core.controller import ControllerConfig
+from .core.costmap import CostmapConfig, ObservationSource
+from .core.navigator import NavigatorConfig
+from .core.planner import PlannerConfig
+from .core.recoveries import RecoveryConfig
+from .core.schema import Spec, declared
+
+COMPAT_NOTE = "accepted for Nav2 compatibility, not used"
+
+
+@dataclass(frozen=True)
+class Key:
+    """One YAML key: its type, default and declaration, and the core field it sets (if any)."""
+
+    name: str
+    type: Any
+    default: Any
+    spec: Spec
+    target: type | None = None     # core config dataclass the value goes to; None: the wrapper reads it
+    field: str = ""                # the field there
+    compat: bool = False           # accepted for Nav2 compatibility, not used
+
+    @property
+    def role(self) -> str:
+        if self.compat:
+            return COMPAT_NOTE
+        return f"{self.target.__name__}.{self.field}" if self.target else "read by the wrapper"
+
+
+def core(cls: type, name: str, *, key: str = "") -> Key:
+    """The key that sets ``cls.name``; everything but the YAML key's name comes from the field."""
+    tp, default, spec = declared(cls)[name]
+    return Key(key or name, tp, default, spec, cls, name)
+
+
+def core_all(cls: type, *, skip: tuple[str, ...] = ()) -> tuple[Key, ...]:
+    """Keys for every declared field of ``cls`` (same names), except ``skip``."""
+    return tuple(core(cls, n) for n in declared(cls) if n not in skip)
+
+
+def own(name: str, tp: Any, default: Any, doc: str, **bounds: Any) -> Key:
+    """A key the wrapper reads itself (a topic, a plugin list, the footprint string)."""
+    return Key(name, tp, default, Spec(doc, **bounds))
+
+
+def compat(name: str, tp: Any, default: Any, doc: str) -> Key:
+    """A Nav2 key we accept (and type-check) but do not use; setting it is reported, not an error."""
+    return Key(name, tp, default, Spec(doc), compat=True)
+
+
+@dataclass(frozen=True)
+class Section:
+    """The keys of one node's ``ros__parameters`` or of one plugin's sub-section."""
+
+    title: str                      # where it lives in the YAML, for messages and the reference
+    keys: tuple[Key, ...]
+    plugins: tuple[str, ...] = ()   # plugin type names this section describes (plugin sections only)
+    doc: str = ""
+
+    def __post_init__(self) -> None:
+        names = [k.name for k in self.keys]
+        if len(names) != len(set(names)):
+            raise ValueError(f"{self.title}: duplicate key in {names}")
+
+    def get(self, name: str) -> Key | None:
+        return next((k for k in self.keys if k.name == name), None)
+
+
+def _sim_time() -> Key:
+    return compat("use_sim_time", bool, False, "the provider config's use_sim_time decides")
+
+
+def _plugin() -> Key:
+    return own("plugin", str, "", "plugin type (one of the names in this section's title)")
+
+
+BT_NAVIGATOR = Section("bt_navigator", (
+    _sim_time(),
+    own("odom_topic", str, "/odom", "odometry topic (an atlas-resolved binding wins; a mismatch is logged)"),
+    *core_all(NavigatorConfig, skip=("controller_frequency",)),
+    core(RecoveryConfig, "number_of_retries"),
+    core(RecoveryConfig, "behaviors", key="recovery_behaviors"),
+    *(core(RecoveryConfig, n) for n in ("spin_dist", "wait_duration", "backup_dist", "backup_speed")),
+), doc="The navigate-to-pose behaviour and the recovery sequence.")
+
+PLANNER_SERVER = Section("planner_server", (
+    _sim_time(),
+    compat("expected_planner_frequency", float, 20.0, "plans run when the navigator asks (replan_frequency)"),
+    own("planner_plugins", list[str], ["GridBased"], "the planner's section name (exactly one)"),
+))
+
+PLANNER_PLUGINS = ("robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
+                   "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner")
+PLANNER = Section("planner_server.<planner>", (_plugin(), *core_all(PlannerConfig)), PLANNER_PLUGINS,
+                  doc="Every listed plugin name runs the same cost-aware A* (names kept for Nav2 profiles).")
+
+CONTROLLER_SERVER = Section("controller_server", (
+    _sim_time(),
+    core(NavigatorConfig, "controller_frequency"),
+    own("controller_plugins", list[str], ["FollowPath"], "the controller's section name (exactly one)"),
+    own("goal_checker_plugins", list[str], ["general_goal_checker"], "the goal checker's section (exactly one)"),
+    own("progress_checker_plugins", list[str], ["progress_checker"],
+        "the progress checker's section (exactly one)"),
+))
+
+CONTROLLER = Section("controller_server.<controller>", (_plugin(), *core_all(ControllerConfig)),
+                     ("robonix_nav::HolonomicPursuitController",))
+
+_GOAL = tuple(core(GoalCheckerConfig, n) for n in ("xy_goal_tolerance", "yaw_goal_tolerance", "stateful"))
+_STOPPED = (core(GoalCheckerConfig, "trans_stopped_velocity"), core(GoalCheckerConfig, "rot_stopped_velocity"))
+SIMPLE_GOAL_CHECKER = Section("controller_server.<goal checker>", (_plugin(), *_GOAL),
+                              ("nav2_controller::SimpleGoalChecker",))
+STOPPED_GOAL_CHECKER = Section("controller_server.<goal checker>", (_plugin(), *_GOAL, *_STOPPED),
+                               ("nav2_controller::StoppedGoalChecker",),
+                               doc="Success also needs the base at rest.")
+GOAL_CHECKERS = {p: s for s in (SIMPLE_GOAL_CHECKER, STOPPED_GOAL_CHECKER) for p in s.plugins}
+
+PROGRESS_CHECKER = Section("controller_server.<progress checker>", (_plugin(), *core_all(ProgressCheckerConfig)),
+                           ("nav2_controller::SimpleProgressChecker",))
+
+_LAYER_FIELDS = ("static_layer", "obstacle_layer", "inflation_layer", "inflation_radius",
+                            "cost_scaling_factor", "inflate_unknown")
+COSTMAP = Section("<global|local>_costmap.<same>", (
+    _sim_time(),
+    compat("global_frame", str, "map", "the provider config's frames decide"),
+    compat("robot_base_frame", str, "base_link", "the provider config's frames decide"),
+    compat("update_frequency", float, 5.0, "layers update as data arrives; the local costmap every control tick"),
+    compat("publish_frequency", float, 1.0, "costmaps are not published"),
+    *core_all(CostmapConfig, skip=_LAYER_FIELDS),
+    own("footprint", str, "[]", "base-frame polygon \"[[x, y], ...]\"; \"[]\": the robot description's"),
+    own("footprint_padding", float, 0.0, "grow the footprint by this on every side (m)", ge=0),
+    own("plugins", list[str], [], "layer section names, each with a 'plugin'"),
+), doc="Both costmaps; the layers are plugin sub-sections listed in 'plugins'.")
+
+STATIC_LAYER = Section("<costmap>.<static layer>", (
+    _plugin(),
+    core(CostmapConfig, "static_layer", key="enabled"),
+    own("map_topic", str, "/map", "map topic (an atlas-resolved binding wins; a mismatch is logged)"),
+    compat("map_subscribe_transient_local", bool, True, "the map is always read transient-local"),
+), ("nav2_costmap_2d::StaticLayer",))
+
+OBSTACLE_LAYER = Section("<costmap>.<obstacle layer>", (
+    _plugin(),
+    core(CostmapConfig, "obstacle_layer", key="enabled"),
+    own("observation_sources", str, "", "space-separated source section names"),
+), ("nav2_costmap_2d::ObstacleLayer",))
+
+OBSERVATION_SOURCE = Section("<obstacle layer>.<source>", (
+    own("topic", str | None, "", "scan topic; empty (no lidar on this deploy) disables the source"),
+    own("data_type", str, "LaserScan", "message type", choices=("LaserScan",)),
+    *core_all(ObservationSource),
+    compat("max_obstacle_height", float, 2.0, "a planar scan has no height"),
+))
+
+INFLATION_LAYER = Section("<costmap>.<inflation layer>", (
+    _plugin(),
+    core(CostmapConfig, "inflation_layer", key="enabled"),
+    *(core(CostmapConfig, n) for n in ("inflation_radius", "cost_scaling_factor", "inflate_unknown")),
+), ("nav2_costmap_2d::InflationLayer",))
+
+LAYERS = {"nav2_costmap_2d::StaticLayer": STATIC_LAYER, "nav2_costmap_2d::ObstacleLayer": OBSTACLE_LAYER,
+          "nav2_costmap_2d::InflationLayer": INFLATION_LAYER}
+
+BEHAVIOR_SERVER = Section("behavior_server", (
+    _sim_time(),
+    own("behavior_plugins", list[str], ["spin", "backup", "wait"], "behaviour section names"),
+    compat("cycle_frequency", float, 10.0, "behaviours step at the controller rate"),
+    *(core(RecoveryConfig, n) for n in ("simulate_ahead_time", "max_rotational_vel", "min_rotational_vel",
+                                        "rotational_acc_lim", "time_allowance")),
+))
+
+BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait"}
+BEHAVIOR = Section("behavior_server.<behavior>", (_plugin(),), tuple(BEHAVIORS))
+
+#: Every table, in the order the reference lists them.
+SECTIONS = (BT_NAVIGATOR, PLANNER_SERVER, PLANNER, CONTROLLER_SERVER, CONTROLLER, SIMPLE_GOAL_CHECKER,
+            STOPPED_GOAL_CHECKER, PROGRESS_CHECKER, COSTMAP, STATIC_LAYER, OBSTACLE_LAYER, OBSERVATION_SOURCE,
+            INFLATION_LAYER, BEHAVIOR_SERVER, BEHAVIOR)
