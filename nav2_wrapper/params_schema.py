@@ -86,7 +86,7 @@ def _sim_time() -> Key:
 
 
 def _plugin() -> Key:
-    return own("plugin", str, "", "plugin type (one of the names in this section's title)")
+    return own("plugin", str, None, "plugin type (one of the names in this section's title)")
 
 
 BT_NAVIGATOR = Section("bt_navigator", (
@@ -135,7 +135,7 @@ PROGRESS_CHECKER = Section("controller_server.<progress checker>", (_plugin(), *
 
 _LAYER_FIELDS = ("static_layer", "obstacle_layer", "inflation_layer", "inflation_radius",
                             "cost_scaling_factor", "inflate_unknown")
-COSTMAP = Section("<global|local>_costmap.<same>", (
+COSTMAP = Section("global_costmap.global_costmap, local_costmap.local_costmap", (
     _sim_time(),
     compat("global_frame", str, "map", "the provider config's frames decide"),
     compat("robot_base_frame", str, "base_link", "the provider config's frames decide"),
@@ -143,7 +143,7 @@ COSTMAP = Section("<global|local>_costmap.<same>", (
     compat("publish_frequency", float, 1.0, "costmaps are not published"),
     *core_all(CostmapConfig, skip=_LAYER_FIELDS),
     own("footprint", str, "[]", "base-frame polygon \"[[x, y], ...]\"; \"[]\": the robot description's"),
-    own("footprint_padding", float, 0.0, "grow the footprint by this on every side (m)", ge=0),
+    own("footprint_padding", float, 0.0, "grow the footprint by this on every side", unit="m", ge=0),
     own("plugins", list[str], [], "layer section names, each with a 'plugin'"),
 ), doc="Both costmaps; the layers are plugin sub-sections listed in 'plugins'.")
 
