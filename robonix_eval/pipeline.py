@@ -118,7 +118,7 @@ class Pipeline:
         self._step = 0
         self.odom: OdomState = self.sim.odometry()
         self.map_to_odom: Pose = (0.0, 0.0, 0.0)
-        self._scan: LaserScan | None = None
+        self._scan: RangeScan | None = None
         self._sensor_pose: Pose | None = None
         self._map_dirty = False
         self._map_sent_at = -math.inf
