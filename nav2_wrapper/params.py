@@ -128,8 +128,8 @@ class _Reader:
             if key.target is not None and into is not None:
                 into.setdefault(key.target, {})[key.field] = value
         for k in sorted(set(data) - set(out)):
-            if not isinstance(data[k], dict):
-                self.warn(f"{path}.{k}", f"is not a parameter of {sec.title} (ignored)")
+            if not (sec.nested and isinstance(data[k], dict)):   # sub-sections are checked by their reader
+                self.warn_subtree(f"{path}.{k}", data[k], f"is not a parameter of {sec.title} (ignored)")
         return out
 
     def warn(self, path: str, why: str) -> None:

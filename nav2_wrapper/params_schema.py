@@ -35,12 +35,6 @@ class Key:
     field: str = ""                # the field there
     compat: bool = False           # accepted for Nav2 compatibility, not used
 
-    @property
-    def role(self) -> str:
-        if self.compat:
-            return COMPAT_NOTE
-        return f"{self.target.__name__}.{self.field}" if self.target else "read by the wrapper"
-
 
 def core(cls: type, name: str, *, key: str = "") -> Key:
     """The key that sets ``cls.name``; everything but the YAML key's name comes from the field."""
@@ -71,6 +65,7 @@ class Section:
     keys: tuple[Key, ...]
     plugins: tuple[str, ...] = ()   # plugin type names this section describes (plugin sections only)
     doc: str = ""
+    nested: bool = False            # mappings inside are sub-sections (plugins, sources), checked separately
 
     def __post_init__(self) -> None:
         names = [k.name for k in self.keys]
@@ -102,7 +97,7 @@ PLANNER_SERVER = Section("planner_server", (
     _sim_time(),
     compat("expected_planner_frequency", float, 20.0, "plans run when the navigator asks (replan_frequency)"),
     own("planner_plugins", list[str], ["GridBased"], "the planner's section name (exactly one)"),
-))
+), nested=True)
 
 PLANNER_PLUGINS = ("robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
                    "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner")
@@ -116,7 +111,7 @@ CONTROLLER_SERVER = Section("controller_server", (
     own("goal_checker_plugins", list[str], ["general_goal_checker"], "the goal checker's section (exactly one)"),
     own("progress_checker_plugins", list[str], ["progress_checker"],
         "the progress checker's section (exactly one)"),
-))
+), nested=True)
 
 CONTROLLER = Section("controller_server.<controller>", (_plugin(), *core_all(ControllerConfig)),
                      ("robonix_nav::HolonomicPursuitController",))
@@ -145,7 +140,7 @@ COSTMAP = Section("global_costmap.global_costmap, local_costmap.local_costmap", 
     own("footprint", str, "[]", "base-frame polygon \"[[x, y], ...]\"; \"[]\": the robot description's"),
     own("footprint_padding", float, 0.0, "grow the footprint by this on every side", unit="m", ge=0),
     own("plugins", list[str], [], "layer section names, each with a 'plugin'"),
-), doc="Both costmaps; the layers are plugin sub-sections listed in 'plugins'.")
+), doc="Both costmaps; the layers are plugin sub-sections listed in 'plugins'.", nested=True)
 
 STATIC_LAYER = Section("<costmap>.<static layer>", (
     _plugin(),
@@ -158,7 +153,7 @@ OBSTACLE_LAYER = Section("<costmap>.<obstacle layer>", (
     _plugin(),
     core(CostmapConfig, "obstacle_layer", key="enabled"),
     own("observation_sources", str, "", "space-separated source section names"),
-), ("nav2_costmap_2d::ObstacleLayer",))
+), ("nav2_costmap_2d::ObstacleLayer",), nested=True)
 
 OBSERVATION_SOURCE = Section("<obstacle layer>.<source>", (
     own("topic", str | None, "", "scan topic; empty (no lidar on this deploy) disables the source"),
@@ -182,7 +177,7 @@ BEHAVIOR_SERVER = Section("behavior_server", (
     compat("cycle_frequency", float, 10.0, "behaviours step at the controller rate"),
     *(core(RecoveryConfig, n) for n in ("simulate_ahead_time", "max_rotational_vel", "min_rotational_vel",
                                         "rotational_acc_lim", "time_allowance")),
-))
+), nested=True)
 
 BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait"}
 BEHAVIOR = Section("behavior_server.<behavior>", (_plugin(),), tuple(BEHAVIORS))

@@ -85,11 +85,3 @@ def declared(cls: type) -> dict[str, tuple[Any, Any, Spec]]:
             out[f.name] = (hints[f.name], f.default, spec)
     return out
 
-
-def check(cfg: Any) -> None:
-    """Raise ValueError naming the first declared field of ``cfg`` whose value is out of range."""
-    for f in dataclasses.fields(cfg):
-        spec = spec_of(f)
-        why = spec.violation(getattr(cfg, f.name)) if spec is not None else None
-        if why:
-            raise ValueError(f"{type(cfg).__name__}.{f.name}: {why}")

@@ -108,6 +108,9 @@ def test_unknown_keys_warn_and_compat_keys_are_listed() -> None:
     assert "local_costmap.local_costmap.ros__parameters.update_frequency" in lp.unused
     assert "behavior_server.ros__parameters.cycle_frequency" in lp.unused
     assert not any("update_frequency" in w for w in lp.warnings)
+    nested = profile_path("sim").read_text().replace("      tolerance: 0.25\n",
+                                                     "      tolerance: 0.25\n      search: {depth: 3}\n")
+    assert any("GridBased.search.depth" in w for w in load_params("sim", text=nested).warnings)
     with pytest.raises(ParamsError, match="update_frequency: must be a number"):
         load_params("sim", text=text.replace("update_frequency: 10.0", "update_frequency: fast"))
 
