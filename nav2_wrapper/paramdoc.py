@@ -29,6 +29,11 @@ def _type_name(tp: Any) -> str:
     return {bool: "bool", int: "int", float: "float", str: "string"}.get(tp, str(tp))
 
 
+def _optional(tp: Any) -> bool:
+    """Whether ``None`` is a valid value of the type (then a None default means "not set", not "required")."""
+    return type(None) in typing.get_args(tp)
+
+
 def _value(v: Any) -> str:
     if v is None:
         return "(required)"
@@ -57,7 +62,8 @@ def _section(sec: ps.Section) -> list[str]:
     lines += ["| key | type | default | unit | range | meaning |", "|---|---|---|---|---|---|"]
     for k in sec.keys:
         meaning = k.spec.doc + (f" ({ps.COMPAT_NOTE})" if k.compat else "")
-        lines.append(f"| `{k.name}` | {_type_name(k.type)} | `{_cell(_value(k.default))}` | {k.spec.unit} | "
+        default = "(unset)" if k.default is None and _optional(k.type) else _value(k.default)
+        lines.append(f"| `{k.name}` | {_type_name(k.type)} | `{_cell(default)}` | {k.spec.unit} | "
                      f"{_cell(k.spec.range_text())} | {_cell(meaning)} |")
     return [*lines, ""]
 

@@ -26,6 +26,7 @@ from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
 from .core.controller import ControllerConfig
 from .core.costmap import CostmapConfig, ObservationSource
 from .core.footprint import Footprint
+from .core.mppi import MppiConfig
 from .core.navigator import NavConfig, NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
@@ -250,14 +251,35 @@ def _check_limits(rd: _Reader, c: ControllerConfig, limits: RobotLimits, path: s
                                       f"= {getattr(limits, robot):g} (the base clamps it)")
 
 
+def _mppi_critics(rd: _Reader, sec: dict[str, Any], cpath: str, listed: list[str], into: Fields) -> None:
+    """Read the listed critics' sections; a critic not listed (or disabled) has its weight set to 0."""
+    unknown = [c for c in listed if c not in ps.CRITICS]
+    if unknown:
+        raise rd.fail(f"{cpath}.critics", f"unsupported critic(s) {', '.join(unknown)} "
+                                          f"(supported: {', '.join(ps.CRITICS)})")
+    weights = into.setdefault(MppiConfig, {})
+    enabled: set[str] = set()
+    for name in listed:
+        v = rd.read(ps.CRITICS[name], sec.get(name), f"{cpath}.{name}", into)
+        if v["enabled"] and name in ps.CRITIC_WEIGHTS:
+            enabled.add(ps.CRITIC_WEIGHTS[name])
+    for field_name in set(ps.CRITIC_WEIGHTS.values()) - enabled:
+        weights[field_name] = 0.0
+    rd.unselected(sec, cpath, set(listed))
+
+
 def _controller_server(rd: _Reader, into: Fields, footprint: Footprint) -> tuple[ControllerConfig, str]:
     """The controller, goal checker and progress checker; returns the controller and its section path."""
     raw, path = rd.node("controller_server")
     v = rd.read(ps.CONTROLLER_SERVER, raw, path, into)
     names = {k: rd.only(v[k], f"{path}.{k}")
              for k in ("controller_plugins", "goal_checker_plugins", "progress_checker_plugins")}
-    sec, table = rd.plugin(raw, path, names["controller_plugins"], _plugins_for(ps.CONTROLLER), "controller")
-    rd.read(table, sec, f"{path}.{names['controller_plugins']}", into)
+    controllers = {**_plugins_for(ps.CONTROLLER), **_plugins_for(ps.MPPI_CONTROLLER)}
+    sec, table = rd.plugin(raw, path, names["controller_plugins"], controllers, "controller")
+    cpath = f"{path}.{names['controller_plugins']}"
+    cv = rd.read(table, sec, cpath, into)
+    if table is ps.MPPI_CONTROLLER:
+        _mppi_critics(rd, sec, cpath, cv["critics"], into)
     sec, table = rd.plugin(raw, path, names["goal_checker_plugins"], ps.GOAL_CHECKERS, "goal checker")
     rd.read(table, sec, f"{path}.{names['goal_checker_plugins']}", into)
     into[GoalCheckerConfig]["stopped"] = table is ps.STOPPED_GOAL_CHECKER
@@ -346,6 +368,7 @@ def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str 
         progress_checker=ProgressCheckerConfig(**into.get(ProgressCheckerConfig, {})),
         recovery=RecoveryConfig(**into.get(RecoveryConfig, {})),
         navigator=NavigatorConfig(**into.get(NavigatorConfig, {})),
+        mppi=MppiConfig(**into[MppiConfig]) if MppiConfig in into else None,
     )
     topics.setdefault("map", map_topic)
     return LoadedParams(cfg, topics, rd.warnings, rd.unused, where)

@@ -15,6 +15,7 @@ from typing import Any
 from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
 from .core.controller import ControllerConfig
 from .core.costmap import CostmapConfig, ObservationSource
+from .core.mppi import MppiConfig
 from .core.navigator import NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
@@ -116,6 +117,64 @@ CONTROLLER_SERVER = Section("controller_server", (
 CONTROLLER = Section("controller_server.<controller>", (_plugin(), *core_all(ControllerConfig)),
                      ("robonix_nav::HolonomicPursuitController",))
 
+#: Nav2 MPPI's names for the velocity and acceleration limits, and the ControllerConfig field each sets.
+MPPI_LIMITS = {"vx_max": "max_vel_x", "vy_max": "max_vel_y", "wz_max": "max_vel_theta", "ax_max": "acc_lim_x",
+               "ay_max": "acc_lim_y", "az_max": "acc_lim_theta"}
+_MPPI_WEIGHTS = ("collision_cost", "cost_weight", "path_follow_weight", "progress_weight", "path_align_weight",
+                 "goal_weight", "goal_distance", "heading_weight", "twirling_weight", "smoothness_weight")
+MPPI_CONTROLLER = Section("controller_server.<controller> (MPPI)", (
+    _plugin(),
+    *(core(ControllerConfig, field, key=key) for key, field in MPPI_LIMITS.items()),
+    *core_all(ControllerConfig, skip=tuple(MPPI_LIMITS.values())),
+    *core_all(MppiConfig, skip=_MPPI_WEIGHTS),
+    core(MppiConfig, "collision_cost"),
+    own("motion_model", str, "Omni", "the base's kinematics", choices=("Omni",)),
+    own("critics", list[str], ["CostCritic", "GoalCritic", "GoalAngleCritic", "PathAlignCritic",
+                                "PathFollowCritic", "PathAngleCritic", "TwirlingCritic", "SmoothnessCritic"],
+        "critic section names; a critic not listed is off (the collision critic is always on)"),
+    compat("iteration_count", int, 1, "one optimisation per control step"),
+    compat("vx_min", float, -0.35, "the omni base's vx range is symmetric: -vx_max … vx_max"),
+    compat("gamma", float, 0.015, "no control-cost term; smoothness is a critic"),
+    compat("prune_distance", float, 1.7, "the path ahead is cut at the horizon"),
+    compat("transform_tolerance", float, 0.1, "poses come in the costmap frame"),
+    compat("enforce_path_inversion", bool, False, "either end may lead"),
+    compat("visualize", bool, False, "no marker output"),
+    compat("retry_attempt_limit", int, 1, "a failed step falls back to the pursuit's candidates"),
+    compat("regenerate_noises", bool, False, "fresh noise every step"),
+), ("nav2_mppi_controller::MPPIController",),
+    doc="Sampling predictive controller for the omni base; the pursuit keys configure its fallback.",
+    nested=True)
+
+
+def _critic(field: str | None, *extra: Key) -> Section:
+    keys: tuple[Key, ...] = (own("enabled", bool, True, "false switches this critic off"),)
+    if field is not None:
+        keys += (core(MppiConfig, field, key="cost_weight"),)
+    return Section("<MPPI controller>.<critic>", (*keys, *extra,
+                                                  compat("cost_power", int, 1, "costs enter linearly")))
+
+
+#: Nav2 critic names -> their section (the MppiConfig weight their ``cost_weight`` sets). Nav2's GoalAngle and
+#: PathAngle critics both feed the one heading critic; ConstraintCritic's limits are enforced by the sampler.
+CRITICS = {
+    "ConstraintCritic": _critic(None),
+    "CostCritic": _critic("cost_weight"),
+    "ObstaclesCritic": _critic("cost_weight"),
+    "GoalCritic": _critic("goal_weight", core(MppiConfig, "goal_distance", key="threshold_to_consider")),
+    "GoalAngleCritic": _critic("heading_weight"),
+    "PathAngleCritic": _critic("heading_weight"),
+    "PathAlignCritic": _critic("path_align_weight"),
+    "PathFollowCritic": _critic("path_follow_weight", core(MppiConfig, "progress_weight")),
+    "PreferForwardCritic": _critic(None),
+    "TwirlingCritic": _critic("twirling_weight"),
+    "SmoothnessCritic": _critic("smoothness_weight"),
+}
+#: The weight each critic switches off when it is not listed (or has enabled: false).
+CRITIC_WEIGHTS = {"CostCritic": "cost_weight", "ObstaclesCritic": "cost_weight", "GoalCritic": "goal_weight",
+                  "GoalAngleCritic": "heading_weight", "PathAngleCritic": "heading_weight",
+                  "PathAlignCritic": "path_align_weight", "PathFollowCritic": "path_follow_weight",
+                  "TwirlingCritic": "twirling_weight", "SmoothnessCritic": "smoothness_weight"}
+
 _GOAL = tuple(core(GoalCheckerConfig, n) for n in ("xy_goal_tolerance", "yaw_goal_tolerance", "stateful"))
 _STOPPED = (core(GoalCheckerConfig, "trans_stopped_velocity"), core(GoalCheckerConfig, "rot_stopped_velocity"))
 SIMPLE_GOAL_CHECKER = Section("controller_server.<goal checker>", (_plugin(), *_GOAL),
@@ -183,6 +242,20 @@ BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "
 BEHAVIOR = Section("behavior_server.<behavior>", (_plugin(),), tuple(BEHAVIORS))
 
 #: Every table, in the order the reference lists them.
-SECTIONS = (BT_NAVIGATOR, PLANNER_SERVER, PLANNER, CONTROLLER_SERVER, CONTROLLER, SIMPLE_GOAL_CHECKER,
+#: The critic sections as the reference shows them (each critic's own default weight is in the MPPI table).
+CRITIC_REFERENCE = Section("<MPPI controller>.<critic>", (
+    own("enabled", bool, True, "false switches this critic off"),
+    own("cost_weight", float | None, None, "the critic's weight; default: the MppiConfig weight it sets", ge=0),
+    own("threshold_to_consider", float | None, None, "GoalCritic only: sets goal_distance", gt=0),
+    own("progress_weight", float | None, None, "PathFollowCritic only: sets progress_weight", ge=0),
+    compat("cost_power", int, 1, "costs enter linearly"),
+), doc="Critic sections, by Nav2 name, and the weight their cost_weight sets: CostCritic and ObstaclesCritic → "
+       "cost_weight; GoalCritic → goal_weight; GoalAngleCritic and PathAngleCritic → heading_weight; "
+       "PathAlignCritic → path_align_weight; PathFollowCritic → path_follow_weight; TwirlingCritic → "
+       "twirling_weight; SmoothnessCritic (ours) → smoothness_weight. ConstraintCritic and PreferForwardCritic "
+       "are accepted: the sampler enforces the limits and either end of the body may lead.")
+
+SECTIONS = (BT_NAVIGATOR, PLANNER_SERVER, PLANNER, CONTROLLER_SERVER, CONTROLLER, MPPI_CONTROLLER,
+            CRITIC_REFERENCE, SIMPLE_GOAL_CHECKER,
             STOPPED_GOAL_CHECKER, PROGRESS_CHECKER, COSTMAP, STATIC_LAYER, OBSTACLE_LAYER, OBSERVATION_SOURCE,
             INFLATION_LAYER, BEHAVIOR_SERVER, BEHAVIOR)

@@ -17,7 +17,7 @@ instead, so switching controllers never loosens the safety check.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,39 +27,39 @@ from robonix_common.geometry import Pose2D, wrap_angle
 from .controller import ControllerConfig, ControlOutput, HolonomicController
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, NO_INFORMATION
-
-
-@dataclass
-class MppiCritics:
-    """Critic weights; a weight of 0 switches a critic off. Names follow Nav2's critics where they match."""
-
-    collision_cost: float = 10000.0   # any new lethal contact of the sampled footprint outline
-    cost_weight: float = 3.0          # mean normalised costmap cost under the trajectory's centre line
-    path_follow_weight: float = 5.0   # end point's distance to the path point the horizon should reach
-    path_align_weight: float = 10.0   # mean distance of the trajectory to the path
-    progress_weight: float = 4.0      # minus the path length the trajectory gains (m)
-    goal_weight: float = 5.0          # near the goal: mean distance to it
-    goal_distance: float = 1.0        # m: where the goal critic takes over from path following
-    heading_weight: float = 2.0       # mean |yaw − target heading| (rad)
-    twirling_weight: float = 0.1      # mean wz²
-    smoothness_weight: float = 0.5    # mean squared change of the controls between steps
+from .schema import param
 
 
 @dataclass
 class MppiConfig:
-    """MPPI sampling parameters (Nav2 names and defaults where Nav2 has them) plus the critics."""
+    """MPPI sampling parameters (Nav2 names and defaults where Nav2 has them) and the critics' weights.
 
-    batch_size: int = 1000
-    time_steps: int = 56
-    model_dt: float = 0.05
-    vx_std: float = 0.2
-    vy_std: float = 0.2
-    wz_std: float = 0.4
-    temperature: float = 0.3
-    collision_stride: int = 2         # time steps between footprint checks of the samples
-    outline_spacing: float = 0.1      # m between footprint outline points checked for the samples
-    seed: int | None = 0              # noise seed (None: fresh entropy); fixed → reproducible runs
-    critics: MppiCritics = field(default_factory=MppiCritics)
+    A critic weight of 0 switches that critic off; the collision critic cannot be switched off."""
+
+    batch_size: int = param(1000, "sampled control sequences per step", ge=16, le=20000)
+    time_steps: int = param(56, "steps per sampled sequence (horizon = time_steps * model_dt)", ge=2, le=500)
+    model_dt: float = param(0.05, "time between two steps of a sequence", unit="s", gt=0, le=1.0)
+    vx_std: float = param(0.2, "sampling noise on vx", unit="m/s", ge=0)
+    vy_std: float = param(0.2, "sampling noise on vy", unit="m/s", ge=0)
+    wz_std: float = param(0.4, "sampling noise on wz", unit="rad/s", ge=0)
+    temperature: float = param(0.3, "softmax temperature: lower follows the best sample more closely", gt=0)
+    collision_stride: int = param(2, "steps between footprint checks of the samples", ge=1, le=50)
+    outline_spacing: float = param(0.1, "spacing of the footprint outline points checked for the samples",
+                                   unit="m", gt=0, le=1.0)
+    seed: int = param(0, "noise seed: the same seed and inputs give the same commands", ge=0)
+    collision_cost: float = param(10000.0, "cost of a sample whose footprint adds a lethal contact", gt=0)
+    cost_weight: float = param(3.0, "weight of the mean normalised costmap cost along a sample", ge=0)
+    path_follow_weight: float = param(5.0, "weight of the end point's distance to where the horizon should reach",
+                                      ge=0)
+    progress_weight: float = param(4.0, "reward per metre of path gained by a sample", ge=0)
+    path_align_weight: float = param(10.0, "weight of a sample's mean distance to the path", ge=0)
+    goal_weight: float = param(5.0, "near the goal: weight of a sample's mean distance to it", ge=0)
+    goal_distance: float = param(1.0, "distance to the goal where the goal critic replaces path following",
+                                 unit="m", gt=0)
+    heading_weight: float = param(2.0, "weight of the mean heading error (path direction, passage yaw, goal yaw)",
+                                  ge=0)
+    twirling_weight: float = param(0.1, "weight of the mean squared turn rate", ge=0)
+    smoothness_weight: float = param(0.5, "weight of the mean squared change between consecutive controls", ge=0)
 
 
 class MppiController(HolonomicController):
@@ -146,7 +146,7 @@ class MppiController(HolonomicController):
     # ---- critics -----------------------------------------------------------------------------------------
     def _score(self, pose: Pose2D, goal: Pose2D, costmap: Costmap, traj: NDArray[np.float64],
                u: NDArray[np.float64], i: int, target: float) -> NDArray[np.float64]:
-        cr = self.mppi.critics
+        cr = self.mppi
         cost = np.zeros(len(traj))
         cost += cr.collision_cost * self._collisions(pose, traj, costmap)
         cost += cr.cost_weight * self._centre_costs(traj, costmap)
@@ -202,7 +202,7 @@ class MppiController(HolonomicController):
         The path ahead is rasterised on the local costmap's grid and a distance transform gives, for every
         cell, the distance to the path and the arc length of its nearest path point: each trajectory pose is
         then two array lookups, whatever the number of samples."""
-        cr, m, c = self.mppi.critics, self.mppi, self.cfg
+        cr, m, c = self.mppi, self.mppi, self.cfg
         horizon = m.time_steps * m.model_dt * c.desired_linear_vel * self.speed_limit
         j_end = int(np.searchsorted(self._cum, self._cum[i] + horizon + 0.5)) + 1
         ahead = self.path[i:j_end]

@@ -23,6 +23,7 @@ from .controller import ControllerConfig, HolonomicController
 from .costmap import Costmap, CostmapConfig, RangeScan
 from .costs import INSCRIBED, LETHAL
 from .footprint import Footprint
+from .mppi import MppiConfig, MppiController
 from .planner import GlobalPlanner, PlannerConfig, PlanResult
 from .recoveries import RecoveryConfig, RecoverySequence
 from .schema import param
@@ -69,6 +70,7 @@ class NavConfig:
     progress_checker: ProgressCheckerConfig = field(default_factory=ProgressCheckerConfig)
     recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+    mppi: MppiConfig | None = None      # set: the MPPI controller; None: the holonomic pursuit controller
 
     @classmethod
     def defaults(cls, footprint: Footprint) -> NavConfig:
@@ -120,7 +122,8 @@ class Navigator:
         self.global_costmap = Costmap(self.cfg.global_costmap)
         self.local_costmap = Costmap(self.cfg.local_costmap)
         self.planner = GlobalPlanner(self.cfg.planner)
-        self.controller = HolonomicController(self.cfg.controller)
+        self.controller = (HolonomicController(self.cfg.controller) if self.cfg.mppi is None
+                           else MppiController(self.cfg.controller, self.cfg.mppi))
         self.goal_checker = GoalChecker(self.cfg.goal_checker)
         self.progress = ProgressChecker(self.cfg.progress_checker)
         self.recovery = RecoverySequence(self.cfg.recovery, self.clear_costmaps)
