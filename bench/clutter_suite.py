@@ -61,15 +61,12 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
 
     scene, seed, shortest, fill, noisy, controller, timeout = job
     if noisy:
-        opts = PipelineOptions(scene=scene, seed=seed)
+        opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
     else:
-        opts = PipelineOptions(scene=scene, seed=seed, odom_noise=OdomNoise(), lidar_noise=LidarNoise())
+        opts = PipelineOptions(scene=scene, seed=seed, controller=controller, odom_noise=OdomNoise(),
+                               lidar_noise=LidarNoise())
     t0 = time.perf_counter()
     pipe = Pipeline(opts)
-    if controller == "mppi":
-        from nav2_wrapper.core.mppi import MppiConfig, MppiController
-
-        pipe.nav.controller = MppiController(pipe.nav.cfg.controller, MppiConfig(seed=seed))
     pipe.run_for(0.5)
     gx, gy = scene["waypoints"]["goal"]
     res = pipe.navigate(gx, gy, math.pi / 2, timeout=timeout)
@@ -106,7 +103,8 @@ def main() -> None:
     ap.add_argument("--worlds", type=int, default=200)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--noise", choices=("both", "on", "off"), default="both")
-    ap.add_argument("--controller", choices=("pursuit", "mppi"), default="pursuit")
+    ap.add_argument("--controller", choices=("profile", "pursuit", "mppi"), default="profile",
+                    help="the sim profile's controller, or override it")
     ap.add_argument("--margin", type=float, default=0.05, help="m of clearance the passability proof demands")
     ap.add_argument("--timeout", type=float, default=120.0, help="s of sim time per crossing")
     ap.add_argument("--jobs", type=int, default=2)

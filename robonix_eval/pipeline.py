@@ -27,6 +27,7 @@ from hal_panda_mobile.sim import (
     load_scene,
 )
 from nav2_wrapper.core import Command, Navigator, RangeScan
+from nav2_wrapper.core.mppi import MppiConfig
 from nav2_wrapper.core.navigator import TERMINAL
 from nav2_wrapper.params import load_params
 from robonix_common.geometry import compose
@@ -51,6 +52,7 @@ class PipelineOptions:
     loop_closure: bool = True
     slam_config: SlamConfig | None = None
     nav_profile: str = "sim"
+    controller: Literal["profile", "pursuit", "mppi"] = "profile"  # override the profile's controller plugin
     physics_hz: float = 500.0
     odom_hz: float = 50.0
     scan_hz: float = 10.0
@@ -106,6 +108,10 @@ class Pipeline:
             cfg = SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": o.loop_closure})
         self.slam = SlamEngine(cfg)
         self.params = load_params(o.nav_profile)
+        if o.controller == "mppi" and self.params.config.mppi is None:
+            self.params.config.mppi = MppiConfig(seed=o.seed)
+        elif o.controller == "pursuit":
+            self.params.config.mppi = None
         self.nav = Navigator(self.params.config)
         self.plan_times: list[float] = []
         self._wrap_planner()
