@@ -1,7 +1,7 @@
 """SLAM core benchmark: throughput, trajectory error, map quality, loop-closure optimisation time.
 
 One command: ``python bench/slam_bench.py`` (prints a table, writes bench/results/slam.json).
-Worlds are the pure-numpy synthetic ones (slam_service.core.synthetic): a two-lap apartment ring and a
+Worlds are the pure-numpy synthetic ones (robonix_eval.synthetic): a two-lap apartment ring and a
 30 x 20 m warehouse loop, 360-beam lidar at 10 Hz, 3 cm range noise (2 cm warehouse), 5 % dropouts,
 drifting odometry. Recording (ray casting) is not timed; only ``SlamEngine.process`` is.
 """
@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from robonix_eval.synthetic import OdomDrift, Recording, World, apartment_world, drive, warehouse_world
 from slam_service.core import SlamConfig, SlamEngine, ate_rmse, occupied_iou
-from slam_service.core.synthetic import OdomNoise, Recording, World, apartment_world, drive, warehouse_world
 
 SLAM_TOOLBOX_SCANS_PER_S = 50.0  # slam_toolbox's "5x real time" claim at a 10 Hz lidar
-DRIFT = OdomNoise(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
+DRIFT = OdomDrift(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
 
 
 def worlds() -> list[tuple[World, dict]]:

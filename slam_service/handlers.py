@@ -18,9 +18,10 @@ import grpc
 from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
 from robonix_api.validation import require_finite, require_range
-from slam_service.core import SlamEngine, render_map_png
+from slam_service.core import SlamEngine
 from slam_service.map_paths import check_note, clip
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.render import render_map_png
 
 log = logging.getLogger("slam_service.handlers")
 NS = "robonix/service/map/"
@@ -78,7 +79,7 @@ class MapHandlers:
             session = engine.session() if engine.graph.n_nodes else None
         writer = None
         if session is not None:
-            from slam_service.core import save_session
+            from slam_service.session_io import save_session
 
             def writer(path: Any) -> None:
                 save_session(session, path)

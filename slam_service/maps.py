@@ -26,7 +26,7 @@ from typing import Any
 
 from robonix_api.mapfile import MapFileError, atomic_write, load_map_yaml, save_map_yaml
 from robonix_common.grid import GridMap
-from slam_service.core import SessionData, SessionFileError, SlamConfig, SlamEngine, load_session
+from slam_service.core import SessionData, SlamConfig, SlamEngine
 from slam_service.map_paths import (
     MARKER,
     NOTE_MAX,
@@ -38,6 +38,7 @@ from slam_service.map_paths import (
     resolve_map_dir,
     stale_staging,
 )
+from slam_service.session_io import SessionFileError, load_session
 
 log = logging.getLogger("slam_service.maps")
 MAP_YAML, MAP_PGM, SESSION, META = "map.yaml", "map.pgm", "session.npz", "meta.json"
@@ -291,7 +292,7 @@ class Autosave:
         self.path = self.folder / SESSION
 
     def write(self, session: SessionData) -> Path:
-        from slam_service.core import save_session
+        from slam_service.session_io import save_session
 
         self.folder.mkdir(parents=True, exist_ok=True)
         return save_session(session, self.path)

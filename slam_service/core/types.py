@@ -8,10 +8,10 @@ from dataclasses import asdict, dataclass, field, fields
 import numpy as np
 from numpy.typing import NDArray
 
-Pose = NDArray[np.float64]  # (x, y, theta)
+from robonix_common.geometry import PoseArray
 
 
-def as_pose(p: object, name: str = "pose") -> Pose:
+def as_pose(p: object, name: str = "pose") -> PoseArray:
     """Validate and convert anything pose-like to a float64 (3,) array (clear error otherwise)."""
     try:
         a = np.asarray(p, dtype=np.float64).reshape(-1)
@@ -176,8 +176,8 @@ class SlamStats:
 class Update:
     """Result of one ``SlamEngine.process`` call."""
 
-    pose_map: Pose
-    map_to_odom: Pose
+    pose_map: PoseArray
+    map_to_odom: PoseArray
     map_changed: bool
     integrated: bool
     response: float = float("nan")

@@ -9,7 +9,8 @@ import pytest
 from PIL import Image
 
 from robonix_common.grid import GridMap
-from slam_service.core import align_se2, ate_rmse, occupied_iou, render_map_png
+from slam_service.core import align_se2, ate_rmse, occupied_iou
+from slam_service.render import render_map_png
 
 
 def test_png_colours_and_orientation() -> None:
