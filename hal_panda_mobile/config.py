@@ -7,21 +7,13 @@ message starts with the field path, e.g. ``rates.scan_rate_hz: must be > 0``.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from hal_panda_mobile.sim import (
-    LidarNoise,
-    OdomNoise,
-    PandaMobileSim,
-    RobotDescription,
-    SimConfigError,
-    available_scenes,
-    load_robot_description,
-    load_scene,
-)
-from hal_panda_mobile.sim.errors import format_validation_error
+from hal_panda_mobile.files import available_scenes, format_validation_error, load_robot_description, load_scene
+from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim, RobotDescription, SimConfigError
 from robonix_api.config_types import FiniteFloat, TopicName
 from robonix_api.validation import finite
 
@@ -124,7 +116,7 @@ def build_sim(cfg: HalConfig) -> PandaMobileSim:
     """The simulator for a validated config (scene, start, noise, rates); SimConfigError names the field."""
     robot = load_robot_description(cfg.robot)
     if cfg.rates.scan_rate_hz is not None:
-        robot = robot.model_copy(update={"lidar": robot.lidar.model_copy(update={"rate_hz": cfg.rates.scan_rate_hz})})
+        robot = dataclasses.replace(robot, lidar=dataclasses.replace(robot.lidar, rate_hz=cfg.rates.scan_rate_hz))
     scene = _scene(cfg, robot)
     return PandaMobileSim(robot, scene, seed=cfg.seed, odom_noise=cfg.noise(), lidar_noise=cfg.lidar_noise,
                           timestep=1.0 / cfg.rates.physics_rate_hz, odom_rate_hz=cfg.rates.odom_rate_hz,

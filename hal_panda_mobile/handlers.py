@@ -102,7 +102,7 @@ class SimHandlers:
             spawned = [o["name"] for o in sim.scene_info()["obstacles"] if str(o["ref"]).startswith("spawned")]
             for name in spawned:
                 sim.remove_box(name)
-            sim.teleport(*sim.scene.start.as_tuple())
+            sim.teleport(*sim.scene.start)
             s.cleared_at = sim.time
             return len(spawned)
 
