@@ -1,0 +1,52 @@
+"""One declaration per tunable: a dataclass field carries its default, range and doc.
+
+``param(0.05, ge=0.005, le=1.0, doc="m per cell")`` is a ``dataclasses.field`` whose metadata holds the
+range under the names pydantic's ``Field`` uses (``gt``, ``ge``, ``lt``, ``le``, ``description``), so a
+config layer that validates files with pydantic enforces the very same range without restating it, and
+:func:`check_ranges` enforces it in the core's ``__post_init__`` for configs built in Python.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+_OPS = {"gt": (">", float.__gt__), "ge": (">=", float.__ge__), "lt": ("<", float.__lt__), "le": ("<=", float.__le__)}
+
+
+class ParamError(ValueError):
+    """A value outside its declared range; ``field`` names it, ``reason`` says what is wrong."""
+
+    def __init__(self, field: str, reason: str, prefix: str = "") -> None:
+        super().__init__(f"{prefix}{field}: {reason}")
+        self.field, self.reason = field, reason
+
+
+def param(default: Any = dataclasses.MISSING, *, doc: str, gt: float | None = None, ge: float | None = None,
+          lt: float | None = None, le: float | None = None) -> Any:
+    """A dataclass field with its range and doc as metadata."""
+    meta: dict[str, Any] = {"description": doc}
+    meta.update({k: v for k, v in (("gt", gt), ("ge", ge), ("lt", lt), ("le", le)) if v is not None})
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def describe_range(meta: Any) -> str:
+    """``within [0.005, 1]`` / ``> 0`` / ``in (0, 5]``-style text for a field's declared range ('' if none)."""
+    lo = ("gt", meta["gt"]) if "gt" in meta else ("ge", meta["ge"]) if "ge" in meta else None
+    hi = ("lt", meta["lt"]) if "lt" in meta else ("le", meta["le"]) if "le" in meta else None
+    if lo and hi:
+        return f"within {'(' if lo[0] == 'gt' else '['}{lo[1]:g}, {hi[1]:g}{')' if hi[0] == 'lt' else ']'}"
+    one = lo or hi
+    return f"{_OPS[one[0]][0]} {one[1]:g}" if one else ""
+
+
+def check_ranges(obj: Any, prefix: str = "") -> None:
+    """Raise :class:`ParamError` for the first numeric field outside its declared range (NaN never passes)."""
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        bounds = [(k, f.metadata[k]) for k in _OPS if k in f.metadata]
+        if not bounds or isinstance(value, bool) or not isinstance(value, int | float):
+            continue
+        if math.isnan(value) or not all(_OPS[k][1](float(value), float(b)) for k, b in bounds):
+            raise ParamError(f.name, f"must be {describe_range(f.metadata)}, got {value:g}", prefix)
