@@ -96,7 +96,8 @@ class MapHandlers:
         map_id = _map_id(req.map_id)
         mode = req.mode.strip() or "localization"
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                              f"mode: must be mapping or localization, got {clip(mode)}")
         if req.has_initial_pose:
             _pose_in_range(req)
         s = self._session()
@@ -140,7 +141,8 @@ class MapHandlers:
         """mapping <-> localization (localization on the loaded map, or on the map built so far)."""
         mode = req.mode.strip()
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                              f"mode: must be mapping or localization, got {clip(mode)}")
         s = self._session()
         if s is None:
             return map_pb2.SwitchMode_Response(ok=False, detail=NOT_INIT)

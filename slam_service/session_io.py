@@ -32,6 +32,7 @@ class SessionSaveError(OSError):
 
 
 def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:
+    """Write ``data`` atomically to ``path``; :class:`SessionSaveError` if it cannot be written."""
     path = Path(path)
     g = data.graph
     n = g.n_nodes
@@ -64,60 +65,69 @@ def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:
     return path
 
 
-def load_session(path: str | os.PathLike[str]) -> SessionData:
-    path = Path(path)
+NEEDED = ("config", "poses", "odom", "stamps", "path_dist", "points", "point_offsets", "origins", "edge_ij",
+          "edge_z", "edge_info", "edge_kind")
 
-    def bad(msg: str) -> SessionFileError:
-        return SessionFileError(f"{path}: {msg}")
 
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    """Every array of the file, after the format tag and version are checked."""
     try:
         with np.load(path, allow_pickle=False) as z:
             a = {k: z[k] for k in z.files}
     except FileNotFoundError as exc:
-        raise bad("no such file") from exc
+        raise SessionFileError(f"{path}: no such file") from exc
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise bad(f"not a SLAM session file ({type(exc).__name__}: {exc})") from exc
+        raise SessionFileError(f"{path}: not a SLAM session file ({type(exc).__name__}: {exc})") from exc
     if str(a.get("format", "")) != FORMAT:
-        raise bad(f"not a SLAM session file (format tag {str(a.get('format', 'missing'))!r})")
+        raise SessionFileError(f"{path}: not a SLAM session file (format tag {str(a.get('format', 'missing'))!r})")
     try:
         version = int(a["version"])
     except (KeyError, ValueError, TypeError) as exc:
-        raise bad("missing or bad 'version'") from exc
+        raise SessionFileError(f"{path}: missing or bad 'version'") from exc
     if version != VERSION:
-        raise bad(f"unsupported session version {version} (this build reads {VERSION})")
-    need = ("config", "poses", "odom", "stamps", "path_dist", "points", "point_offsets", "origins", "edge_ij",
-            "edge_z", "edge_info", "edge_kind")
-    for k in need:
+        raise SessionFileError(f"{path}: unsupported session version {version} (this build reads {VERSION})")
+    for k in NEEDED:
         if k not in a:
-            raise bad(f"missing array '{k}'")
+            raise SessionFileError(f"{path}: missing array '{k}'")
+    return a
+
+
+def _shape_problem(a: dict[str, np.ndarray]) -> str | None:
+    """What is inconsistent between the arrays (shapes, point offsets, non-finite values), or None."""
+    n, e = len(a["poses"]), len(a["edge_ij"])
+    shapes = {"poses": (n, 3), "odom": (n, 3), "stamps": (n,), "path_dist": (n,), "origins": (n, 2),
+              "point_offsets": (n + 1,), "edge_ij": (e, 2), "edge_z": (e, 3), "edge_info": (e, 3, 3),
+              "edge_kind": (e,)}
+    for k, shp in shapes.items():
+        if a[k].shape != shp:
+            return f"'{k}' has shape {a[k].shape}, expected {shp}"
+    off, pts = a["point_offsets"], a["points"]
+    if pts.ndim != 2 or pts.shape[1] != 2 or off[0] != 0 or off[-1] != len(pts) or np.any(np.diff(off) < 0):
+        return "'points'/'point_offsets' are inconsistent"
+    for k in ("poses", "odom", "points", "edge_z", "edge_info", "origins"):
+        if not np.all(np.isfinite(a[k])):
+            return f"'{k}' contains NaN/inf"
+    return None
+
+
+def load_session(path: str | os.PathLike[str]) -> SessionData:
+    """Read and check a session file; :class:`SessionFileError` names the file and the problem."""
+    path = Path(path)
+    a = _read_arrays(path)
     try:
         config = SlamConfig.from_dict(json.loads(str(a["config"])))
     except (ValueError, TypeError) as exc:
-        raise bad(f"bad 'config': {exc}") from exc
-    poses = a["poses"]
-    n = len(poses)
-    shapes = {"poses": (n, 3), "odom": (n, 3), "stamps": (n,), "path_dist": (n,), "origins": (n, 2),
-              "point_offsets": (n + 1,)}
-    for k, shp in shapes.items():
-        if a[k].shape != shp:
-            raise bad(f"'{k}' has shape {a[k].shape}, expected {shp}")
-    e = len(a["edge_ij"])
-    for k, shp in {"edge_ij": (e, 2), "edge_z": (e, 3), "edge_info": (e, 3, 3), "edge_kind": (e,)}.items():
-        if a[k].shape != shp:
-            raise bad(f"'{k}' has shape {a[k].shape}, expected {shp}")
-    off = a["point_offsets"]
-    pts = a["points"]
-    if pts.ndim != 2 or pts.shape[1] != 2 or off[0] != 0 or off[-1] != len(pts) or np.any(np.diff(off) < 0):
-        raise bad("'points'/'point_offsets' are inconsistent")
-    for k in ("poses", "odom", "points", "edge_z", "edge_info", "origins"):
-        if not np.all(np.isfinite(a[k])):
-            raise bad(f"'{k}' contains NaN/inf")
-    graph = PoseGraph(poses.astype(np.float64).copy())
+        raise SessionFileError(f"{path}: bad 'config': {exc}") from exc
+    problem = _shape_problem(a)
+    if problem:
+        raise SessionFileError(f"{path}: {problem}")
+    graph = PoseGraph(a["poses"].astype(np.float64).copy())
     try:
         for (i, j), zz, info, kind in zip(a["edge_ij"], a["edge_z"], a["edge_info"], a["edge_kind"], strict=True):
             graph.add_edge(int(i), int(j), zz, info, int(kind))
     except ValueError as exc:
-        raise bad(f"bad edge: {exc}") from exc
-    points = [pts[off[k]:off[k + 1]].astype(np.float32) for k in range(n)]
+        raise SessionFileError(f"{path}: bad edge: {exc}") from exc
+    off, pts = a["point_offsets"], a["points"]
+    points = [pts[off[k]:off[k + 1]].astype(np.float32) for k in range(len(a["poses"]))]
     return SessionData(graph, a["odom"].astype(np.float64), a["stamps"].astype(np.float64),
                        a["path_dist"].astype(np.float64), points, a["origins"].astype(np.float64), config)

@@ -160,8 +160,8 @@ class SlamEngine:
 
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
-        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy), max(c.coarse_factor, c.loop_coarse_factor),
-                            c.smear_sigma, grid.resolution)
+        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy),
+                            max(c.coarse_factor, c.loop_coarse_factor), c.smear_sigma, grid.resolution)
         pad = int(math.ceil(m / grid.resolution))
         mask = np.pad(grid.data >= 65, pad)
         self._fixed_lookup = LookupGrid.from_mask(mask, grid.resolution, grid.origin_x - pad * grid.resolution,
@@ -360,7 +360,8 @@ class SlamEngine:
         limit = c.loop_max_correction + c.loop_max_correction_ratio * (path[k] - path[cand])
         at_edge = (abs(m.pose[0] - poses[k, 0]) > c.loop_search_window_xy - c.resolution
                    or abs(m.pose[1] - poses[k, 1]) > c.loop_search_window_xy - c.resolution
-                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi)) > c.loop_search_window_theta - c.angular_step)
+                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi))
+                   > c.loop_search_window_theta - c.angular_step)
         if m.response < c.loop_min_response or corr > limit or at_edge:
             return self._reject_loop("response/window")
         found = self._verified_loop(lookup, k, cand, m)
