@@ -50,3 +50,23 @@ def check_ranges(obj: Any, prefix: str = "") -> None:
             continue
         if math.isnan(value) or not all(_OPS[k][1](float(value), float(b)) for k, b in bounds):
             raise ParamError(f.name, f"must be {describe_range(f.metadata)}, got {value:g}", prefix)
+
+
+def markdown_table(cls: type) -> str:
+    """The parameter reference of a config dataclass: one row per field (default, range, doc)."""
+    rows = ["| field | default | range | meaning |", "|---|---|---|---|"]
+    for f in dataclasses.fields(cls):
+        default = f.default if f.default is not dataclasses.MISSING else "required"
+        shown = str(default).lower() if isinstance(default, bool) else f"{default:g}" \
+            if isinstance(default, float) else str(default)
+        rows.append(f"| `{f.name}` | {shown} | {describe_range(f.metadata)} | {f.metadata.get('description', '')} |")
+    return "\n".join(rows) + "\n"
+
+
+def replace_block(text: str, name: str, body: str) -> str:
+    """``text`` with the lines between ``<!-- name:begin -->`` and ``<!-- name:end -->`` replaced by ``body``."""
+    begin, end = f"<!-- {name}:begin -->\n", f"<!-- {name}:end -->"
+    head, found, rest = text.partition(begin)
+    if not found or end not in rest:
+        raise ValueError(f"no {begin.strip()} ... {end} block")
+    return head + begin + body + end + rest.partition(end)[2]

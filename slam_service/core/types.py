@@ -67,9 +67,9 @@ class SlamConfig:
     min_response: float = param(0.35, ge=0, le=1, doc="match score below which the scan falls back to odometry")
     match_penalty: float = param(0.2, ge=0, le=1, doc="score reduction at the window edge: prior on the odometry "
                                  "seed")
-    refine: bool = True  # sub-cell Gauss-Newton refinement of the correlative optimum
+    refine: bool = param(True, doc="sub-cell Gauss-Newton refinement of the correlative optimum")
     # loop closure
-    loop_closure: bool = True
+    loop_closure: bool = param(True, doc="search for and add loop closures")
     loop_search_radius: float = param(3.0, gt=0, le=100.0, doc="m; candidate nodes within this distance")
     loop_min_chain_distance: float = param(6.0, ge=0, doc="m; ... and at least this far back along the path")
     loop_submap_radius: float = param(4.0, gt=0, le=100.0, doc="m; old nodes within this distance of the "
@@ -87,7 +87,8 @@ class SlamConfig:
                                         "inlier")
     loop_min_inlier_fraction: float = param(0.8, ge=0, le=1, doc="fraction of endpoints that must be inliers "
                                             "(overlap test)")
-    loop_verify: bool = True  # reverse match: the old node's scan into the current local submap must agree
+    loop_verify: bool = param(True, doc="reverse match: the old node's scan into the current local submap must "
+                              "agree")
     loop_verify_xy: float = param(0.03, gt=0, doc="m; largest forward/reverse disagreement ...")
     loop_verify_theta: float = param(0.015, gt=0, doc="rad; ... and in heading")
     loop_sigma_floor_xy: float = param(0.01, gt=0, doc="m; loop edges are never trusted more than this ...")
