@@ -7,9 +7,10 @@ errors that name the field (``walls[3].thickness: must be > 0``).
 
 from .robot import DEFAULT_ROBOT_YAML, load_robot_description, robot_from_dict
 from .scene import SCENES_DIR, available_scenes, load_scene, scene_from_dict, scene_from_map
-from .validate import format_validation_error, validate
+from .validate import core_field, format_validation_error, validate
 
 __all__ = [
-    "DEFAULT_ROBOT_YAML", "SCENES_DIR", "available_scenes", "format_validation_error", "load_robot_description",
+    "DEFAULT_ROBOT_YAML", "SCENES_DIR", "available_scenes", "core_field", "format_validation_error",
+    "load_robot_description",
     "load_scene", "robot_from_dict", "scene_from_dict", "scene_from_map", "validate",
 ]

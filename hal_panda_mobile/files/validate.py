@@ -6,11 +6,12 @@ written with :func:`hal_panda_mobile.sim.spec.param`, and runs its ``__post_init
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
-from typing import Literal, TypeVar
+from typing import Any, Literal, TypeVar
 
-from pydantic import BaseModel, ConfigDict, ValidationError, create_model
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 from hal_panda_mobile.sim import SimConfigError
 
@@ -54,6 +55,13 @@ def format_validation_error(exc: ValidationError, prefix: str = "", *, skip: int
             path, msg = f"{path}.{rel.group(1)}", rel.group(2)
         parts.append(f"{path}: {msg}" if path else msg)
     return prefix + "; ".join(parts)
+
+
+def core_field(cls: type, name: str) -> Any:
+    """A pydantic ``Field`` for a config model that reuses a core dataclass field's default, range and doc,
+    so a CMD_INIT key that feeds the core is not declared a second time."""
+    f = {f.name: f for f in dataclasses.fields(cls)}[name]
+    return Field(f.default, **f.metadata)
 
 
 @functools.cache

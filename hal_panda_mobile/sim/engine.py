@@ -45,14 +45,14 @@ class LidarNoise:
 class SimParams:
     """Everything about a run that is not robot or scene; checked so errors name the field."""
 
-    seed: int = param(0, ge=0, doc="seeds odometry and lidar noise; same seed, same run")
+    seed: int = param(0, ge=0, le=2**63 - 1, doc="seeds odometry and lidar noise; same seed, same run")
     timestep: float = param(0.002, gt=0, le=0.002, doc="s, physics step (>= 500 Hz)")
-    odom_rate_hz: float = param(50.0, gt=0, doc="sim-time Hz of odometry integration")
+    odom_rate_hz: float = param(50.0, gt=0, le=1000.0, doc="sim-time Hz of odometry integration")
     contact_check_interval: float = param(0.01, gt=0, doc="s between contact scans (>= one step)")
     collision_debounce: float = param(0.2, ge=0, doc="s without contact that ends a collision episode")
     odom_noise: OdomNoise = field(default_factory=OdomNoise)
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
-    odom_frame_at_start: bool = False  # True: odom starts at (0,0,0); False: odom frame == world frame
+    odom_frame_at_start: bool = param(False, doc="true: odom starts at (0, 0, 0); false: odom frame == world")
 
     def __post_init__(self) -> None:
         check_ranges(self)
