@@ -70,3 +70,10 @@ def replace_block(text: str, name: str, body: str) -> str:
     if not found or end not in rest:
         raise ValueError(f"no {begin.strip()} ... {end} block")
     return head + begin + body + end + rest.partition(end)[2]
+
+
+def render_doc(text: str, blocks: dict[str, type]) -> str:
+    """``text`` with each ``<!-- name:begin/end -->`` block replaced by the table of its dataclass."""
+    for name, cls in blocks.items():
+        text = replace_block(text, name, markdown_table(cls))
+    return text

@@ -6,29 +6,19 @@ when the file is stale, so the declaration on the dataclass stays the only one a
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from robonix_common.params import markdown_table, replace_block
+from robonix_common.params import render_doc
 from slam_service.core import SlamConfig
 
 CAPABILITY_MD = Path(__file__).with_name("CAPABILITY.md")
-BLOCK = "slam-parameters"
+BLOCKS: dict[str, type] = {"slam-parameters": SlamConfig}
 
 
 def rendered(text: str) -> str:
-    """``text`` (CAPABILITY.md) with the generated table in its block."""
-    return replace_block(text, BLOCK, markdown_table(SlamConfig))
-
-
-def main() -> int:
-    text = CAPABILITY_MD.read_text()
-    new = rendered(text)
-    if new != text:
-        CAPABILITY_MD.write_text(new)
-        print(f"updated {CAPABILITY_MD}")
-    return 0
+    """``text`` (CAPABILITY.md) with the generated tables in their blocks."""
+    return render_doc(text, BLOCKS)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    CAPABILITY_MD.write_text(rendered(CAPABILITY_MD.read_text()))

@@ -48,12 +48,12 @@ def relative(a: Pose2D, b: Pose2D) -> Pose2D:
 class OdomNoise:
     """The simulated wheel odometry's error model (the formulas are in this module's docstring)."""
 
-    v_scale_std: float = param(0.0, ge=0, doc="fraction, per tick")
-    w_scale_std: float = param(0.0, ge=0, doc="fraction, per tick")
-    v_add_std: float = param(0.0, ge=0, doc="m/s, per tick")
-    w_add_std: float = param(0.0, ge=0, doc="rad/s, per tick")
+    v_scale_std: float = param(0.0, ge=0, doc="std dev of the linear speed scale error per tick (fraction)")
+    w_scale_std: float = param(0.0, ge=0, doc="std dev of the yaw rate scale error per tick (fraction)")
+    v_add_std: float = param(0.0, ge=0, doc="std dev of additive linear speed noise per tick while moving (m/s)")
+    w_add_std: float = param(0.0, ge=0, doc="std dev of additive yaw rate noise per tick while moving (rad/s)")
     scale_bias: float = param(0.0, doc="systematic wheel-radius error (fraction)")
-    w_bias: float = param(0.0, doc="rad/s gyro-like yaw drift while moving")
+    w_bias: float = param(0.0, doc="gyro-like yaw drift while moving (rad/s)")
 
     def __post_init__(self) -> None:
         check_ranges(self)
