@@ -9,6 +9,7 @@ grid, median planning time. Everything but the planning time is sim-time and det
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import platform
@@ -131,7 +132,7 @@ def main() -> None:
     for label, lidar in passes.items():
         rows = [run_scene(s, args.goals, args.seed, lidar, args.controller) for s in args.scenes]
         print(f"== {label}" + (f": lidar noise {lidar.noise_std} m, dropout {lidar.dropout_prob}" if lidar else ""))
-        report[label] = {"lidar_noise": lidar.model_dump() if lidar else None, **_table(rows)}
+        report[label] = {"lidar_noise": dataclasses.asdict(lidar) if lidar else None, **_table(rows)}
     hard = [] if args.no_hard else run_hard(args.seed)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

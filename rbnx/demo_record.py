@@ -203,7 +203,7 @@ def render_map(path: Path, rec: Recorder, rpc: DemoRpc, plans: list[np.ndarray])
         _write(path, card.png)
         return f"{card.width}x{card.height} px map card from the mapping service (no /map over DDS)"
     from robonix_api.dds.convert import msg_to_grid
-    from slam_service.core.render import render_map_png
+    from slam_service.render import render_map_png
 
     grid = msg_to_grid(msg)
     scale = max(1, min(4, MAX_IMAGE_PX // max(grid.width, grid.height, 1)))

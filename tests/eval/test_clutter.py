@@ -57,10 +57,10 @@ def test_automaton_fill_and_smoothing() -> None:
 
 
 def test_generated_world_is_a_valid_scene_with_the_goal_ten_metres_up() -> None:
-    from hal_panda_mobile.sim import load_scene
+    from hal_panda_mobile.files import load_scene
 
     world = next(w for w in (generate(s, 0.25, survive=3) for s in range(20)) if w.passable)
     scene = load_scene(world.scene())
-    assert math.isclose(scene.waypoints["goal"][1] - scene.start.y, 10.0)
+    assert math.isclose(scene.waypoints["goal"][1] - scene.start[1], 10.0)
     assert len(scene.boxes) == len(world.post_rects) > 0
     assert world.shortest >= 10.0 - 0.05

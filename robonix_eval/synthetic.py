@@ -13,8 +13,7 @@ from numpy.typing import NDArray
 
 from robonix_common.geometry import compose, relative, wrap_angle
 from robonix_common.grid import GridMap
-
-from .types import Scan
+from slam_service.core import Scan
 
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1
 
@@ -113,7 +112,7 @@ def warehouse_world() -> World:
 
 
 @dataclass
-class OdomNoise:
+class OdomDrift:
     """Odometry error model: scale errors, a heading bias per metre, white noise per step."""
 
     trans_scale: float = 0.02
@@ -133,11 +132,11 @@ class Recording:
 
 def drive(world: World, *, speed: float = 0.4, rate_hz: float = 10.0, max_yaw_rate: float = 1.2,
           beams: int = 360, range_max: float = 12.0, range_noise: float = 0.01, dropout: float = 0.0,
-          odom_noise: OdomNoise | None = None, seed: int = 0, mount: tuple[float, float, float] = (0, 0, 0),
+          odom_noise: OdomDrift | None = None, seed: int = 0, mount: tuple[float, float, float] = (0, 0, 0),
           ) -> Recording:
     """Drive the waypoints (holonomic, facing the direction of travel) and record scans + odometry."""
     rng = np.random.default_rng(seed)
-    on = odom_noise or OdomNoise()
+    on = odom_noise or OdomDrift()
     dt = 1.0 / rate_hz
     wp = np.asarray(world.waypoints, dtype=float)
     poses = []
