@@ -1,7 +1,7 @@
 """Which YAML key of a Nav2 params profile sets which core parameter: one table per node and plugin.
 
 A key that sets a core field takes its type, default, unit, range and doc from the field's declaration
-(``core.schema.param``), so they are written once, in the core. The few keys the wrapper reads itself
+(``robonix_common.params.param``), so they are written once, in the core. The few keys the wrapper reads itself
 (topics, plugin lists, the footprint string) and the keys accepted only for Nav2 compatibility are
 declared here, once. ``nav2_wrapper.params`` validates and builds from these tables, and
 ``nav2_wrapper.paramdoc`` renders them as the parameter reference in CAPABILITY.md.
@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from robonix_common.params import Spec, declared
+
 from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
 from .core.controller import ControllerConfig
 from .core.costmap import CostmapConfig, ObservationSource
@@ -19,7 +21,6 @@ from .core.mppi import MppiConfig
 from .core.navigator import NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
-from .core.schema import Spec, declared
 
 COMPAT_NOTE = "accepted for Nav2 compatibility, not used"
 

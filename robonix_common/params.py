@@ -1,16 +1,22 @@
-"""One declaration per tunable: a dataclass field carries its default, range and doc.
+"""One declaration per tunable: a dataclass field carries its default, unit, range and doc.
 
-``param(0.05, ge=0.005, le=1.0, doc="m per cell")`` is a ``dataclasses.field`` whose metadata holds the
-range under the names pydantic's ``Field`` uses (``gt``, ``ge``, ``lt``, ``le``, ``description``), so a
-config layer that validates files with pydantic enforces the very same range without restating it, and
-:func:`check_ranges` enforces it in the core's ``__post_init__`` for configs built in Python.
+``param(0.05, "m per cell", ge=0.005, le=1.0)`` is a ``dataclasses.field`` whose metadata holds a
+:class:`Spec` and the range under the names pydantic's ``Field`` uses (``gt``, ``ge``, ``lt``, ``le``,
+``description``). The navigation params tables validate YAML against the Spec and generate their reference
+from it; a config layer that validates files with pydantic enforces the very same range without restating
+it; :func:`check_ranges` enforces it in a core's ``__post_init__`` for configs built in Python. Every core
+(navigation, SLAM, simulator) declares its parameters with this one helper. Plain Python: cores import it.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import typing
+from dataclasses import dataclass
 from typing import Any
+
+_KEY = "robonix_param"
 
 _OPS = {"gt": (">", float.__gt__), "ge": (">=", float.__ge__), "lt": ("<", float.__lt__), "le": ("<=", float.__le__)}
 
@@ -23,10 +29,64 @@ class ParamError(ValueError):
         self.field, self.reason = field, reason
 
 
-def param(default: Any = dataclasses.MISSING, *, doc: str, gt: float | None = None, ge: float | None = None,
-          lt: float | None = None, le: float | None = None) -> Any:
-    """A dataclass field with its range and doc as metadata."""
-    meta: dict[str, Any] = {"description": doc}
+@dataclass(frozen=True)
+class Spec:
+    """What a parameter means and which values it accepts (bounds are inclusive unless ``gt``/``lt``)."""
+
+    doc: str
+    unit: str = ""
+    gt: float | None = None
+    ge: float | None = None
+    lt: float | None = None
+    le: float | None = None
+    choices: tuple[str, ...] = ()
+
+    def violation(self, value: Any) -> str | None:
+        """Why ``value`` is out of range (None when it is fine); scalars and each item of a sequence."""
+        if isinstance(value, (tuple, list)):
+            for item in value:
+                why = self.violation(item)
+                if why:
+                    return why
+            return None
+        if self.choices and value not in self.choices:
+            return f"{value!r} is not one of {', '.join(self.choices)}"
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            return None
+        if isinstance(value, float) and not math.isfinite(value):
+            return f"must be a finite number, got {value}"
+        for bound, ok, op in ((self.gt, lambda b: value > b, ">"), (self.ge, lambda b: value >= b, ">="),
+                              (self.lt, lambda b: value < b, "<"), (self.le, lambda b: value <= b, "<=")):
+            if bound is not None and not ok(bound):
+                return f"must be {op} {bound:g}, got {value:g}"
+        return None
+
+    def range_text(self) -> str:
+        """The accepted range for people: ``> 0``, ``0 … 252``, ``one of a, b``; empty when unbounded."""
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
+        lo = f"> {self.gt:g}" if self.gt is not None else (f">= {self.ge:g}" if self.ge is not None else "")
+        hi = f"< {self.lt:g}" if self.lt is not None else (f"<= {self.le:g}" if self.le is not None else "")
+        if self.ge is not None and self.le is not None:
+            return f"{self.ge:g} … {self.le:g}"
+        return ", ".join(p for p in (lo, hi) if p)
+
+
+def param(default: Any = dataclasses.MISSING, doc: str = "", *, unit: str = "", gt: float | None = None,
+          ge: float | None = None, lt: float | None = None, le: float | None = None,
+          choices: tuple[str, ...] = ()) -> Any:
+    """A dataclass field that is a tunable parameter: its default and its declaration, written once.
+
+    The metadata holds the :class:`Spec` (what the navigation params tables and references read) and the
+    range under pydantic ``Field``'s names (what :func:`check_ranges` and :func:`markdown_table` read)."""
+    if not doc:
+        raise TypeError("param() needs a doc string: say what the parameter means")
+    spec = Spec(doc, unit, gt, ge, lt, le, choices)
+    if default is not dataclasses.MISSING:
+        why = spec.violation(default)
+        if why:
+            raise ValueError(f"default {default!r} violates its own declaration: {why}")
+    meta: dict[str, Any] = {_KEY: spec, "description": doc}
     meta.update({k: v for k, v in (("gt", gt), ("ge", ge), ("lt", lt), ("le", le)) if v is not None})
     return dataclasses.field(default=default, metadata=meta)
 
@@ -77,3 +137,20 @@ def render_doc(text: str, blocks: dict[str, type]) -> str:
     for name, cls in blocks.items():
         text = replace_block(text, name, markdown_table(cls))
     return text
+
+
+def spec_of(f: dataclasses.Field) -> Spec | None:
+    """The declaration of a dataclass field, or None for a field that is not a parameter."""
+    return f.metadata.get(_KEY)
+
+
+def declared(cls: type) -> dict[str, tuple[Any, Any, Spec]]:
+    """``{field name: (type, default, spec)}`` for every declared parameter of a config dataclass."""
+    hints = typing.get_type_hints(cls)
+    out = {}
+    for f in dataclasses.fields(cls):
+        spec = spec_of(f)
+        if spec is not None:
+            out[f.name] = (hints[f.name], f.default, spec)
+    return out
+

@@ -6,8 +6,7 @@ import math
 from dataclasses import dataclass
 
 from robonix_common.geometry import Pose2D, wrap_angle
-
-from .schema import param
+from robonix_common.params import param
 
 
 @dataclass

@@ -21,11 +21,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 from .costmap import Costmap
 from .costs import LETHAL, NO_INFORMATION, distance_from_cost
 from .footprint import Footprint
-from .schema import param
 
 
 @dataclass

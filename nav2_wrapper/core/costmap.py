@@ -16,10 +16,10 @@ from numpy.typing import NDArray
 
 from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
+from robonix_common.params import param
 
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint
-from .schema import param
 
 
 @dataclass

@@ -23,11 +23,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 from .controller import ControllerConfig, ControlOutput, HolonomicController
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, NO_INFORMATION
-from .schema import param
 
 
 @dataclass

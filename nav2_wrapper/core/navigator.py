@@ -17,6 +17,7 @@ import numpy as np
 
 from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
+from robonix_common.params import param
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, HolonomicController
@@ -26,7 +27,6 @@ from .footprint import Footprint
 from .mppi import MppiConfig, MppiController
 from .planner import GlobalPlanner, PlannerConfig, PlanResult
 from .recoveries import RecoveryConfig, RecoverySequence
-from .schema import param
 
 PENDING, RUNNING, SUCCEEDED, FAILED, CANCELED, IDLE = "PENDING", "RUNNING", "SUCCEEDED", "FAILED", "CANCELED", "IDLE"
 TERMINAL = (SUCCEEDED, FAILED, CANCELED)

@@ -10,10 +10,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 from .controller import HolonomicController
 from .costmap import Costmap
-from .schema import param
 
 BEHAVIORS = ("clear_costmaps", "spin", "wait", "backup")
 

@@ -18,9 +18,9 @@ from nav2_wrapper.core import (
     ProgressCheckerConfig,
     RecoveryConfig,
 )
-from nav2_wrapper.core.schema import declared
 from nav2_wrapper.params import ParamsError, load_params, profile_path
 from nav2_wrapper.robot_io import RobotDescriptionError, RobotLimits, load_robot
+from robonix_common.params import declared
 
 CONFIGS = (ControllerConfig, CostmapConfig, GoalCheckerConfig, NavigatorConfig, ObservationSource, PlannerConfig,
            ProgressCheckerConfig, RecoveryConfig)
