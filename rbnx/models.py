@@ -18,6 +18,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from rbnx.envexpand import apply_env_section, expand_tree
 from rbnx.supervise import RestartMode, RestartPolicy
+from robonix_common.errors import field_path, field_problems
+from robonix_common.errors import validation_lines as common_validation_lines
 
 KINDS: tuple[str, ...] = ("primitive", "service", "skill")
 DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
@@ -195,29 +197,13 @@ class DeployFile(BaseModel):
 # ---------------------------------------------------------------- helpers
 
 
-def loc_to_path(loc: tuple[Any, ...]) -> str:
-    """('service', 1, 'name') -> 'service[1].name'."""
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
-    return out or "(top level)"
-
-
-def _msg(err: Mapping[str, Any]) -> str:
-    msg = str(err.get("msg", "invalid"))
-    if err.get("type") == "missing":
-        return "missing required key"
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    return msg[:1].lower() + msg[1:]
+#: ('service', 1, 'name') -> 'service[1].name' (the project's one formatter, robonix_common.errors).
+loc_to_path = field_path
 
 
 def validation_lines(label: str, exc: ValidationError) -> list[str]:
-    return [f"{label}: {loc_to_path(tuple(e['loc']))}: {_msg(e)}" for e in exc.errors()]
+    """One ``label: path: message`` problem per pydantic error."""
+    return [f"{label}: {line}" for line in common_validation_lines(exc)]
 
 
 def read_yaml(path: Path, label: str | None = None) -> Any:
@@ -373,7 +359,7 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     try:
         model = DeployFile.model_validate(expanded)
     except ValidationError as exc:
-        found += [(tuple(e["loc"]), _msg(e)) for e in exc.errors()]
+        found += field_problems(exc)
     if found:
         order = {k: i for i, k in enumerate(expanded)}
         found.sort(key=lambda lm: (order.get(lm[0][0], -1) if lm[0] else -1,
