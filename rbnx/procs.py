@@ -12,67 +12,19 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-
-def _stat_fields(pid: int) -> list[str] | None:
-    """Fields of /proc/<pid>/stat after the command name (index 0 = state)."""
-    try:
-        data = Path(f"/proc/{pid}/stat").read_text()
-    except (FileNotFoundError, ProcessLookupError, PermissionError, OSError):
-        return None
-    return data[data.rfind(")") + 2:].split()
-
-
-def proc_state(pid: int) -> str | None:
-    f = _stat_fields(pid)
-    return f[0] if f else None
-
-
-def proc_start_ticks(pid: int) -> int | None:
-    """Start time in clock ticks since boot; pairs with a PID to survive PID reuse."""
-    f = _stat_fields(pid)
-    return int(f[19]) if f else None
-
-
-def pid_alive(pid: int, start_ticks: int | None = None) -> bool:
-    """Running (not a zombie) and, when given, the same process as recorded."""
-    f = _stat_fields(pid)
-    if not f or f[0] in ("Z", "X"):
-        return False
-    return start_ticks is None or int(f[19]) == start_ticks
-
-
-def _all_pids() -> list[int]:
-    return [int(n) for n in os.listdir("/proc") if n.isdigit()]
-
-
-def group_members(pgid: int) -> list[int]:
-    """Live (non-zombie) processes whose process group is `pgid`."""
-    out = []
-    for pid in _all_pids():
-        f = _stat_fields(pid)
-        if f and f[0] not in ("Z", "X") and int(f[2]) == pgid:
-            out.append(pid)
-    return out
-
-
-def descendants(pid: int) -> list[int]:
-    """Live descendants of `pid` (by parent links), including ones that left the group with setsid."""
-    children: dict[int, list[int]] = {}
-    for p in _all_pids():
-        f = _stat_fields(p)
-        if f and f[0] not in ("Z", "X"):
-            children.setdefault(int(f[1]), []).append(p)
-    out, todo = [], [pid]
-    while todo:
-        for c in children.get(todo.pop(), []):
-            out.append(c)
-            todo.append(c)
-    return out
+from robonix_api.procs import (  # noqa: F401  (re-exported: rbnx's modules and tests read /proc through here)
+    descendants,
+    group_members,
+    pid_alive,
+    proc_start_ticks,
+    proc_state,
+    stop_ladder,
+    wait_gone,
+)
 
 
 def tail(path: Path, n: int = 15) -> list[str]:
@@ -127,25 +79,13 @@ class ProcGroup:
                     os.kill(p, sig)
 
     def wait_gone(self, timeout: float) -> bool:
-        deadline = time.monotonic() + timeout
-        while True:
-            if not self.alive_pids():
-                return True
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.05)
+        """True once no process of the group (or an escaped descendant) is left, False after ``timeout``."""
+        return wait_gone(lambda: bool(self.alive_pids()), timeout)
 
     def stop(self, term_timeout: float = 30.0) -> str:
         """SIGTERM the group, wait, then SIGKILL; returns how it ended ('exited'|'terminated'|'killed')."""
         self.remember_descendants()
-        if not self.alive_pids():
-            return "exited"
-        self.signal(signal.SIGTERM)
-        if self.wait_gone(term_timeout):
-            return "terminated"
-        self.signal(signal.SIGKILL)
-        self.wait_gone(10.0)
-        return "killed"
+        return stop_ladder(self.signal, lambda: bool(self.alive_pids()), term_timeout)
 
 
 _supervised = False
@@ -237,19 +177,4 @@ def stop_recorded(pid: int | None, pgid: int | None, start_ticks: int | None,
                 with contextlib.suppress(ProcessLookupError, PermissionError):
                     os.kill(p, sig)
 
-    def wait(timeout: float) -> bool:
-        deadline = time.monotonic() + timeout
-        while alive():
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.05)
-        return True
-
-    if not alive():
-        return "exited"
-    send(signal.SIGTERM)
-    if wait(term_timeout):
-        return "terminated"
-    send(signal.SIGKILL)
-    wait(10.0)
-    return "killed"
+    return stop_ladder(send, lambda: bool(alive()), term_timeout)

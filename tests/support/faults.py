@@ -29,6 +29,7 @@ import grpc
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import stop_process
 from robonix_api.proto_gen import navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
@@ -266,13 +267,8 @@ class SimBoot:
 
     def _stop_own_atlas(self) -> None:
         a, self.own_atlas = self.own_atlas, None
-        if a is not None and a.poll() is None:
-            a.terminate()
-            try:
-                a.wait(15)
-            except subprocess.TimeoutExpired:
-                a.kill()
-                a.wait(15)
+        if a is not None:
+            stop_process(a, 15.0, kill_timeout=15.0)
 
     def close(self) -> None:
         """Last resort (a failed test): SIGCONT + SIGKILL every recorded process, by PID."""
