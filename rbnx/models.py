@@ -16,8 +16,8 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from rbnx.boot.supervise import RestartMode, RestartPolicy
 from rbnx.envexpand import apply_env_section, expand_tree
-from rbnx.supervise import RestartMode, RestartPolicy
 from robonix_common.errors import field_path, field_problems
 from robonix_common.errors import validation_lines as common_validation_lines
 
@@ -109,7 +109,7 @@ class PackageManifest(BaseModel):
 
 
 class RestartFields(BaseModel):
-    """Supervision of one process by `rbnx boot` (see rbnx/supervise.py): whether it is started again
+    """Supervision of one process by `rbnx boot` (see rbnx/boot/supervise.py): whether it is started again
     after it exits on its own, how many times in a row at most, and the first backoff delay."""
 
     restart: RestartMode = "never"

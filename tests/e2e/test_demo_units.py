@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.demo_goals import choose_goals, parse_detail, path_length
+from rbnx.demo.goals import choose_goals, parse_detail, path_length
 
 from .conftest import e2e_env, rbnx_cmd
 

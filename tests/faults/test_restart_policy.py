@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rbnx.models import ManifestProblems, load_deploy
-from rbnx.supervise import RestartPolicy, RestartTracker, exit_text
+from rbnx.boot.supervise import RestartPolicy, RestartTracker, exit_text
 
 REPO = Path(__file__).resolve().parents[2]
 

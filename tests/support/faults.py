@@ -86,7 +86,7 @@ class SimBoot:
 
     def __init__(self, tmp: Path, scene: str = "kitchen", rtf: str = "1", env: dict[str, str] | None = None,
                  boot_timeout_s: float = 180.0, deploy: Path = SIM_DEPLOY) -> None:
-        from rbnx.demo_boot import pick_domain_id
+        from rbnx.demo.boot import pick_domain_id
 
         self.tmp, self.deploy = tmp, deploy
         self.listen = f"127.0.0.1:{free_port()}"
