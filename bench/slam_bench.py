@@ -112,13 +112,15 @@ def main() -> None:
               f"(motion gating 0.2 m / 0.2 rad), {args.repeats} runs, medians")
         print(f"  all scans/s          {on['all_scans_per_s']:8.0f}   (x{on['all_scans_per_s'] / 10:.0f} real time;"
               f" slam_toolbox claim 5x = {SLAM_TOOLBOX_SCANS_PER_S:.0f}/s)")
-        print(f"  integrated scans/s   {on['integrated_scans_per_s']:8.0f}   (1 / mean cost of a scan that passes gating, incl. loop closure + re-render;"
+        print(f"  integrated scans/s   {on['integrated_scans_per_s']:8.0f}   "
+              "(1 / mean cost of a scan that passes gating, incl. loop closure + re-render;"
               f" per integrated scan {on['integrated_scan_ms_median']:.1f} ms, per gated scan"
               f" {on['gated_scan_ms_median']:.2f} ms)")
         print(f"  integrated scans/s (CPU time) {on['integrated_scans_per_cpu_s']:5.0f} mean,"
               f" {1e3 / on['integrated_scan_cpu_ms_median']:5.0f} median   (per-scan CPU median "
               f"{on['integrated_scan_cpu_ms_median']:.1f} ms)")
-        print(f"  ATE RMSE (start frame) LC on {on['ate_rmse_m'] * 100:5.2f} cm | LC off {off['ate_rmse_m'] * 100:5.2f} cm"
+        print(f"  ATE RMSE (start frame) LC on {on['ate_rmse_m'] * 100:5.2f} cm | "
+              f"LC off {off['ate_rmse_m'] * 100:5.2f} cm"
               f" | odometry {on['odometry_ate_rmse_m'] * 100:6.1f} cm  (aligned, LC on: "
               f"{on['ate_rmse_aligned_m'] * 100:.2f} cm)")
         print(f"  map IoU (observed walls, 1-cell tol.) LC on {on['map_iou_observed']:.3f} | LC off "

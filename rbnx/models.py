@@ -335,6 +335,21 @@ def section_order(raw: Mapping[str, Any]) -> list[str]:
     return present + [k for k in KINDS if k not in present]
 
 
+def _expand_deploy(raw: dict[str, Any], base_env: dict[str, str],
+                   label: str) -> tuple[dict[str, Any], dict[str, str], list[str]]:
+    """Apply the deploy file's ``env:`` section to ``base_env`` and expand ``${VAR}`` in every other section;
+    returns the expanded document, the environment and the problems (each prefixed with ``label``)."""
+    problems: list[str] = []
+    env_section = raw.get("env")
+    env = base_env
+    if isinstance(env_section, dict):
+        env_problems: list[str] = []
+        env = apply_env_section(env_section, base_env, env_problems)
+        problems += [f"{label}: {p}" for p in env_problems]
+    expanded = {k: (v if k == "env" else expand_tree(v, env, str(k), problems)) for k, v in raw.items()}
+    return expanded, env, [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
+
+
 def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: str | None = None) -> ResolvedDeploy:
     """Parse, expand, validate a deploy file and every package it references; all problems at once."""
     path = Path(path)
@@ -346,15 +361,7 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     if not isinstance(raw, dict):
         raise ManifestProblems([f"{label}: top level must be a mapping, got {type(raw).__name__}"])
 
-    problems: list[str] = []
-    env_section = raw.get("env")
-    env = base_env
-    if isinstance(env_section, dict):
-        env_problems: list[str] = []
-        env = apply_env_section(env_section, base_env, env_problems)
-        problems += [f"{label}: {p}" for p in env_problems]
-    expanded = {k: (v if k == "env" else expand_tree(v, env, str(k), problems)) for k, v in raw.items()}
-    problems = [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
+    expanded, env, problems = _expand_deploy(raw, base_env, label)
     found = _source_problems(expanded)
     try:
         model = DeployFile.model_validate(expanded)

@@ -83,27 +83,13 @@ class Replayer:
 
     def run(self, stop: threading.Event | None = None,
             on_progress: Callable[[float, ReplayStats], None] | None = None) -> ReplayStats:
-        from rbnx.rosmsg import KNOWN, type_by_name
         from robonix_api.dds import Clock, DdsNode, Time
 
         stop = stop or threading.Event()
         reader = self._open()
         node = DdsNode(domain_id=self.domain_id, name="rbnx_replay")
         try:
-            conns, pubs, types = [], {}, {}
-            for c in reader.connections:
-                if self.topics is not None and c.topic not in self.topics:
-                    continue
-                cls = type_by_name(c.msgtype)
-                if cls is None:
-                    self.stats.skipped_types[c.topic] = c.msgtype
-                    continue
-                out = self.remaps.get(c.topic, c.topic)
-                if out not in pubs:
-                    qos = KNOWN[c.topic].qos if c.topic in KNOWN else "reliable"
-                    pubs[out] = node.create_publisher(out, cls, qos, 1 if qos == "latched" else 100)
-                conns.append(c)
-                types[c.id] = (cls, out)
+            conns, pubs, types = self._publishers(reader, node)
             if not conns:
                 raise ReplayError(f"{self.path}: nothing to replay (no topic of a known type selected)")
             recorded_clock = any(c.topic == CLOCK for c in conns)
@@ -142,6 +128,29 @@ class Replayer:
             node.close()
             reader.close()
         return self.stats
+
+    def _publishers(self, reader: Any, node: Any) -> tuple[list[Any], dict[str, Any], dict[int, tuple[Any, str]]]:
+        """The recorded connections to replay, one publisher per (remapped) topic, and each connection's
+        message class and output topic; connections of unknown types are counted in ``stats.skipped_types``."""
+        from rbnx.rosmsg import KNOWN, type_by_name
+
+        conns: list[Any] = []
+        pubs: dict[str, Any] = {}
+        types: dict[int, tuple[Any, str]] = {}
+        for c in reader.connections:
+            if self.topics is not None and c.topic not in self.topics:
+                continue
+            cls = type_by_name(c.msgtype)
+            if cls is None:
+                self.stats.skipped_types[c.topic] = c.msgtype
+                continue
+            out = self.remaps.get(c.topic, c.topic)
+            if out not in pubs:
+                qos = KNOWN[c.topic].qos if c.topic in KNOWN else "reliable"
+                pubs[out] = node.create_publisher(out, cls, qos, 1 if qos == "latched" else 100)
+            conns.append(c)
+            types[c.id] = (cls, out)
+        return conns, pubs, types
 
     @staticmethod
     def _sleep_until(t: float, stop: threading.Event) -> bool:

@@ -4,7 +4,8 @@
 so only the same user can read it) and hands it to the atlas and every child as ``$ROBONIX_DEPLOY_TOKEN``.
 The other commands (``rbnx navigate``, ``rbnx lifecycle``, ``rbnx map-card``, …) look it up in the state
 file of the deployment whose atlas they talk to (else they use an exported ``$ROBONIX_DEPLOY_TOKEN``) and
-put it into their own environment, where the SDK's clients pick it up; so the README's commands work unchanged. ``rbnx token`` prints it for agents.
+put it into their own environment, where the SDK's clients pick it up; so the README's commands work
+unchanged. ``rbnx token`` prints it for agents.
 """
 
 from __future__ import annotations

@@ -321,5 +321,6 @@ class EntryRunner:
                 "run_dir": self.child_env(self._atlas_addr)["RBNX_RUN_DIR"] if self._atlas_addr else "",
                 "manifest": str(self.entry.manifest_path),
                 "pid": p.pid if p else None, "pgid": p.pgid if p else None,
-                "start_ticks": p.start_ticks if p else None, "extra_pids": [[x, proc_start_ticks(x)] for x in sorted(p.extra_pids)] if p else [],
+                "start_ticks": p.start_ticks if p else None,
+                "extra_pids": [[x, proc_start_ticks(x)] for x in sorted(p.extra_pids)] if p else [],
                 "log": str(self.log_path), "ready_at": self.ready_at, "restarts": self.restarts}

@@ -4,6 +4,7 @@ final map.png rendered from them."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import sys
 import threading
@@ -92,10 +93,8 @@ class Recorder:
         tf, node, self._tf, self._node = self._tf, self._node, None, None
         for thing in (tf, node):
             if thing is not None:
-                try:
+                with contextlib.suppress(Exception):  # best effort at teardown
                     thing.close()
-                except Exception:
-                    pass
 
     # ------------------------------------------------------------------ inputs
 

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from rbnx.boot.deployment import StateNotFound, locate_state
-from rbnx.models import load_deploy
 from rbnx.boot.entry import EntryRunner, Timing
 from rbnx.boot.statefile import deployment_key, find_states, run_dir, state_path, write_state
+from rbnx.models import load_deploy
 from robonix_nav_data import resources
 
 
