@@ -13,16 +13,19 @@ from robonix_api.proto_gen import atlas_pb2
 
 
 def to_dict(msg: Any) -> dict[str, Any]:
+    """A protobuf message as a JSON-ready dict with the proto field names and every field present."""
     return MessageToDict(msg, preserving_proto_field_name=True, always_print_fields_with_no_presence=True)
 
 
 def table(rows: list[list[str]], header: list[str]) -> list[str]:
+    """Rows as left-aligned columns under ``header`` (plain text, no borders)."""
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(header)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     return [fmt.format(*header).rstrip(), *(fmt.format(*r).rstrip() for r in rows)]
 
 
 def age(ms: int) -> str:
+    """How long ago a millisecond epoch stamp was, e.g. ``3.2s ago`` (``-`` for never)."""
     if not ms:
         return "-"
     return f"{max(0.0, time.time() - ms / 1000):.1f}s ago"

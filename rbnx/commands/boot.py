@@ -37,6 +37,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Validate the deploy file (exit 2, nothing started), refuse a second boot of it (exit 1), then boot and serve."""
     from rbnx.models import load_deploy
 
     path = Path(args.file or DEFAULT_DEPLOY)

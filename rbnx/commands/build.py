@@ -48,6 +48,7 @@ def build_one(root: Path, pm: PackageManifest, env: dict[str, str], clean: bool,
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the ``build:`` step of each package (of ``-p`` dirs or of a deploy file); exit 1 when any failed."""
     jobs: list[tuple[Path, PackageManifest, dict[str, str]]] = []
     if args.package:
         for p in args.package:

@@ -19,6 +19,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Cancel a run through the navigation provider's cancel contract; exit 1 when it refuses or is unreachable."""
     rpc = DemoRpc(args.atlas)
     try:
         accepted, detail = rpc.cancel_run(args.run_id)

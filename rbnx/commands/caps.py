@@ -22,11 +22,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and print its providers."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print the providers at ``atlas`` (table or ``--json``), with endpoints when ``-v``."""
     kind = {"primitive": 1, "service": 2, "skill": 3}.get(args.kind or "", 0)
     provs = sorted(atlas.query(kind=kind, id=args.id or ""), key=lambda p: p.id)
     restarts = restarts_for_atlas(atlas.addr)

@@ -18,11 +18,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and print its open channels."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print the channels InspectAtlas lists (table or ``--json``)."""
     data = atlas.inspect()
     chans = data.get("channels", []) if isinstance(data, dict) else []
     if isinstance(chans, dict):

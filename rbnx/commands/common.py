@@ -20,14 +20,17 @@ def deploy_arg(sp: argparse.ArgumentParser) -> None:
 
 
 def default_log_dir() -> Path:
+    """``./rbnx-logs/<timestamp>``: where a boot's logs go unless ``--log-dir`` says otherwise."""
     return Path("rbnx-logs") / time.strftime("%Y%m%d-%H%M%S")
 
 
 def boot_alive(st: dict[str, Any]) -> bool:
+    """Whether the rbnx process that wrote this state file still runs (same PID and start time)."""
     return bool(st.get("pid")) and pid_alive(int(st["pid"]), st.get("start_ticks"))
 
 
 def recorded_alive(st: dict[str, Any]) -> bool:
+    """Whether any child or the atlas listed in this state file still runs (the boot itself may be gone)."""
     procs = [*(st.get("children") or []), *([st["atlas_proc"]] if st.get("atlas_proc") else [])]
     return any(p.get("pid") and pid_alive(int(p["pid"]), p.get("start_ticks")) for p in procs)
 

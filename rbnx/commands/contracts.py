@@ -19,11 +19,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and print its catalogue."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print the contracts under ``--prefix`` (table or ``--json``)."""
     cs = atlas.list_contracts(args.prefix or "")
     if args.json:
         print(json.dumps([to_dict(c) for c in cs], indent=2))

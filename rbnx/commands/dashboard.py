@@ -24,6 +24,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Serve the dashboard for ``--atlas`` (or the boot of ``-f``) until Ctrl-C; exit 2 for a bad port or file."""
     problem = check_port(args.port)
     if problem:
         print(f"rbnx dashboard: {problem}", file=sys.stderr)

@@ -69,6 +69,7 @@ def builtin_scenes() -> list[str]:
 
 
 def resolve_scene(scene: str) -> str:
+    """A built-in scene name, ``random:SEED`` or an existing scene YAML (made absolute), else UsageError."""
     if scene in builtin_scenes():
         return scene
     if scene.startswith("random:"):
@@ -83,6 +84,7 @@ def resolve_scene(scene: str) -> str:
 
 
 def resolve_deploy(arg: str | None) -> Path:
+    """The deploy file to boot: ``--deploy``, else ./examples/sim/deploy.yaml, else the packaged one."""
     if arg:
         p = Path(arg)
         if not p.is_file():
@@ -153,6 +155,8 @@ def _wait_line(line: LiveLine, names: list[str], t0: float) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Boot the sim, map while driving to the goals, write map.png and summary.json; exit 0 only when every goal
+    succeeded."""
     from rbnx.models import load_deploy
 
     try:

@@ -21,11 +21,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and describe one provider."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print one provider in detail, or with ``--check`` one health line (exit 1 if gone or failed)."""
     p = atlas.provider(args.provider)
     if p is None:
         print(f"rbnx describe: no provider {args.provider!r} at {atlas.addr}")

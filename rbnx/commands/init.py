@@ -24,6 +24,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Copy the example deploys into DIR; exit 2 when DIR is a file or an example is already there."""
     dest = Path(args.dir)
     if dest.exists() and not dest.is_dir():
         print(f"rbnx init: {dest} exists and is not a directory", file=sys.stderr)

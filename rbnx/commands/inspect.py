@@ -16,10 +16,12 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and print its InspectAtlas JSON."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print InspectAtlas as sorted, indented JSON."""
     print(json.dumps(atlas.inspect(), indent=2, sort_keys=True))
     return 0

@@ -98,6 +98,7 @@ def _direct(st: dict[str, Any], tool: str, arguments: dict[str, Any]) -> tuple[b
 
 
 def run(args: argparse.Namespace) -> int:
+    """List a running boot's entries or run one verb, through its gateway when it serves one, else directly."""
     path = Path(args.file or DEFAULT_DEPLOY)
     tool, arguments = _request(args)
     try:

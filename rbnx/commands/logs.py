@@ -24,6 +24,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Print the last ``-n`` lines of each log of a running boot (or of one entry)."""
     path = Path(args.file or DEFAULT_DEPLOY)
     try:
         st = read_state(locate_state(path, getattr(args, "atlas", None)))

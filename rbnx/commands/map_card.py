@@ -58,11 +58,13 @@ def _write(path: Path, data: bytes) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and write the map card."""
     with Atlas(args.atlas) as atlas:
         return write_card(args, atlas)
 
 
 def write_card(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Fetch the map card PNG from the map provider and write it atomically to ``-o``."""
     pid = _provider(atlas, args.provider)
     endpoint, _ = atlas.endpoint(pid, MAP_CARD, atlas_pb2.TRANSPORT_GRPC)
     with auth.channel(endpoint, options=GRPC_OPTIONS) as ch:

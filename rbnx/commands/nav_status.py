@@ -18,6 +18,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Print the state of a run (default the latest); exit 1 when it is unknown or the provider is unreachable."""
     rpc = DemoRpc(args.atlas)
     try:
         st = rpc.status(args.run_id)

@@ -47,6 +47,7 @@ def _check(args: argparse.Namespace) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Send the goal, then follow it to the end (exit 0 only on SUCCEEDED); Ctrl-C cancels it (exit 130)."""
     problem = _check(args)
     if problem:
         print(f"rbnx navigate: {problem}", file=sys.stderr)

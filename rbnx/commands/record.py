@@ -29,6 +29,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check the arguments (exit 2), then record the topics to the .mcap file until Ctrl-C or ``--duration``."""
     from rbnx.rosmsg import DEFAULT_TOPICS, KNOWN, TopicError, parse_topic
 
     names = list(dict.fromkeys("/" + t.strip().lstrip("/") if ":" not in t else t for t in args.topics))

@@ -29,6 +29,8 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check the arguments (exit 2), then publish the recording with /clock until its end (or forever with
+    ``--loop``)."""
     stop = threading.Event()
     try:
         remaps = dict(parse_remap(a) for a in args.remap)

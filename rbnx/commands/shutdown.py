@@ -76,6 +76,7 @@ def _shutdown_orphans(st: dict[str, Any], term_timeout: float) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Ask the running boot to shut down; when it is gone, stop what its state file lists, dependents first."""
     path = Path(args.file or DEFAULT_DEPLOY)
     try:
         spath = locate_state(path, getattr(args, "atlas", None))

@@ -34,6 +34,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Start one package against a running atlas, bring it to ACTIVE and keep it until Ctrl-C or it exits."""
     root, pm = load_package(Path(args.package), args.manifest)
     config: dict[str, Any] = {}
     if args.config:

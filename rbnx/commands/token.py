@@ -23,6 +23,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Print the deployment token of the boot serving ``--atlas`` (or of ``-f``); exit 1 when none is recorded."""
     token = ""
     if args.file:
         from rbnx.boot.deployment import StateNotFound, locate_state

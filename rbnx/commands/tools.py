@@ -21,11 +21,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Connect to ``--atlas`` and print its MCP tools."""
     with Atlas(args.atlas) as atlas:
         return show(args, atlas)
 
 
 def show(args: argparse.Namespace, atlas: Atlas) -> int:
+    """Print every MCP tool (and the deployment's gateway first) as a table or ``--json``."""
     rows, out = [], []
     for p in sorted(atlas.query(transport=atlas_pb2.TRANSPORT_MCP), key=lambda p: p.id):
         for c in p.capabilities:

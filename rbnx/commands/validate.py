@@ -52,6 +52,7 @@ def validate_path(path: Path) -> tuple[list[str], str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check each deploy file or package manifest; print one line per problem and exit 2 when there are any."""
     paths = [Path(p) for p in args.paths]
     if not paths:
         default = Path(DEFAULT_DEPLOY)
