@@ -26,7 +26,8 @@ def test_demo_usage_errors_exit_2_and_start_nothing(tmp_path: Path, args: list[s
                        cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stdout + r.stderr
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], r.stderr
+    assert len(lines) == 1, r.stderr
+    assert message in lines[0], r.stderr
     assert not (tmp_path / "out").exists()
 
 
