@@ -75,7 +75,8 @@ def pick_pairs(cm: Costmap, n: int, rng: np.random.Generator) -> list[tuple[tupl
     return pairs
 
 
-def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float], steps: int = 400) -> list[float]:
+def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float],
+                          steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
     fp = load_footprint()
     local = Costmap(CostmapConfig(name="local", rolling_window=True, width=4.0, height=4.0, obstacle_layer=False,
@@ -159,10 +160,12 @@ def main() -> None:
             row["cost_vs_exact_optimal_max"] = round(float(np.max(cost_ratio)), 4)
         results["densities"][f"{dens:.2f}"] = row
         print(f"density {row['obstacle_density']:.2f}: plan median {row['plan_ms_median']:.1f} ms, "
-              f"p95 {row['plan_ms_p95']:.1f} ms, max {row['plan_ms_max']:.1f} ms, path median {row['path_m_median']:.1f} m, "
+              f"p95 {row['plan_ms_p95']:.1f} ms, max {row['plan_ms_max']:.1f} ms, "
+              f"path median {row['path_m_median']:.1f} m, "
               f"length/straight {row['length_vs_straight_line_median']:.3f}"
               + (f", length/exact-optimal {row['length_vs_exact_optimal_median']:.3f}, "
-                 f"cost/exact-optimal {row['cost_vs_exact_optimal_median']:.3f} (max {row['cost_vs_exact_optimal_max']:.3f})"
+                 f"cost/exact-optimal {row['cost_vs_exact_optimal_median']:.3f} "
+                 f"(max {row['cost_vs_exact_optimal_max']:.3f})"
                  if len_ratio else "") + f", failures {fails}, costmap build {t_costmap:.2f} s")
         s, g = pairs[0]
         ctrl_times += controller_step_times(cm, planner.plan(cm, s, g).path, g)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.demo_goals import choose_goals, parse_detail, path_length
+from rbnx.demo.goals import choose_goals, parse_detail, path_length
 
 from .conftest import e2e_env, rbnx_cmd
 
@@ -26,7 +26,8 @@ def test_demo_usage_errors_exit_2_and_start_nothing(tmp_path: Path, args: list[s
                        cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stdout + r.stderr
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], r.stderr
+    assert len(lines) == 1, r.stderr
+    assert message in lines[0], r.stderr
     assert not (tmp_path / "out").exists()
 
 
