@@ -10,6 +10,7 @@ The functions are duck-typed on ``exc.errors()`` (a list of dicts with ``loc``, 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
@@ -20,12 +21,16 @@ _TEMPLATES = {
     "less_than": "must be < {lt}",
     "less_than_equal": "must be <= {le}",
     "missing": "missing required key",
+    "missing_argument": "missing required key",
     "extra_forbidden": "unknown field",
+    "unexpected_keyword_argument": "unknown field",
 }
 #: Prefixes pydantic puts before the text of a ``ValueError`` / ``assert`` raised in a validator.
 _PREFIXES = ("Value error, ", "Assertion failed, ")
 #: How an empty location (the whole document) is named.
 ROOT = "(top level)"
+#: A check inside a model that names the field relative to it ("size: must be > 0").
+_RELATIVE = re.compile(r"^([A-Za-z_]\w*): (.*)$", re.S)
 
 
 class HasErrors(Protocol):
@@ -50,7 +55,7 @@ def error_message(err: Mapping[str, Any], *, unknown: str | None = None) -> str:
     message without its ``Value error,`` prefix and with a lower-case first letter (it follows a colon).
     ``unknown`` replaces the wording for an unexpected key."""
     kind = err.get("type")
-    if kind == "extra_forbidden" and unknown is not None:
+    if kind in ("extra_forbidden", "unexpected_keyword_argument") and unknown is not None:
         return unknown
     template = _TEMPLATES.get(str(kind))
     if template is not None:
@@ -65,20 +70,31 @@ def error_message(err: Mapping[str, Any], *, unknown: str | None = None) -> str:
     return msg[:1].lower() + msg[1:]
 
 
-def field_problems(exc: HasErrors, *, unknown: str | None = None) -> list[tuple[tuple[Any, ...], str]]:
-    """``(loc, message)`` per error, for callers that sort or merge them with problems of their own."""
-    return [(tuple(e.get("loc", ())), error_message(e, unknown=unknown)) for e in exc.errors()]
+def field_problems(exc: HasErrors, *, unknown: str | None = None,
+                   skip: int = 0) -> list[tuple[tuple[Any, ...], str]]:
+    """``(loc, message)`` per error, for callers that sort or merge them with problems of their own.
+
+    ``skip`` drops that many leading location parts (a wrapper model's field). A validator's message that
+    names a field relative to its object (``size: must be > 0``) has that field joined onto the location."""
+    out = []
+    for e in exc.errors():
+        loc, msg = tuple(e.get("loc", ()))[skip:], error_message(e, unknown=unknown)
+        rel = _RELATIVE.match(msg) if e.get("type") == "value_error" and loc else None
+        if rel:
+            loc, msg = (*loc, rel.group(1)), rel.group(2)
+        out.append((loc, msg))
+    return out
 
 
-def validation_lines(exc: HasErrors, *, unknown: str | None = None, root: str = ROOT) -> list[str]:
+def validation_lines(exc: HasErrors, *, unknown: str | None = None, root: str = ROOT, skip: int = 0) -> list[str]:
     """One ``path: message`` line per error (``rbnx validate`` prints these one per line)."""
-    return [f"{field_path(loc, root)}: {msg}" for loc, msg in field_problems(exc, unknown=unknown)]
+    return [f"{field_path(loc, root)}: {msg}" for loc, msg in field_problems(exc, unknown=unknown, skip=skip)]
 
 
 def format_validation_error(exc: HasErrors, prefix: str = "", *, unknown: str | None = None,
-                            root: str = ROOT) -> str:
+                            root: str = ROOT, skip: int = 0) -> str:
     """All errors on one line, ``prefix`` first: ``walls[3].thickness: must be > 0; lidar.rate_hz: ...``."""
-    return prefix + "; ".join(validation_lines(exc, unknown=unknown, root=root))
+    return prefix + "; ".join(validation_lines(exc, unknown=unknown, root=root, skip=skip))
 
 
 def check_finite(value: float, message: str = "must be a finite number") -> float:

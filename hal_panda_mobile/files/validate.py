@@ -8,60 +8,22 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import re
 from typing import Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 from hal_panda_mobile.sim import SimConfigError
+from robonix_common.errors import format_validation_error
 
 T = TypeVar("T")
-
-_MESSAGES = {
-    "greater_than": "must be > {gt}",
-    "greater_than_equal": "must be >= {ge}",
-    "less_than": "must be < {lt}",
-    "less_than_equal": "must be <= {le}",
-    "missing": "required field is missing",
-    "missing_argument": "required field is missing",
-    "extra_forbidden": "unknown field",
-    "unexpected_keyword_argument": "unknown field",
-}
-# A core check names the field relative to its object ("size: must be > 0"): join it onto the path.
-_RELATIVE = re.compile(r"^([A-Za-z_]\w*): (.*)$", re.S)
-
-
-def _loc(loc: tuple) -> str:
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += f".{part}" if out else str(part)
-    return out
-
-
-def format_validation_error(exc: ValidationError, prefix: str = "", *, skip: int = 0) -> str:
-    """Pydantic errors -> ``walls[3].thickness: must be > 0; ...`` (short, field-first); ``skip`` drops
-    leading path parts (a wrapper model's field)."""
-    parts = []
-    for err in exc.errors():
-        template = _MESSAGES.get(err["type"])
-        msg = template.format(**err.get("ctx", {})) if template else err["msg"]
-        msg = msg.removeprefix("Value error, ")
-        path = _loc(tuple(err["loc"])[skip:])
-        rel = _RELATIVE.match(msg) if err["type"] == "value_error" else None
-        if rel and path:
-            path, msg = f"{path}.{rel.group(1)}", rel.group(2)
-        parts.append(f"{path}: {msg}" if path else msg)
-    return prefix + "; ".join(parts)
+_FIELD_KEYS = ("gt", "ge", "lt", "le", "description")   # what pydantic's Field takes of a param()'s metadata
 
 
 def core_field(cls: type, name: str) -> Any:
     """A pydantic ``Field`` for a config model that reuses a core dataclass field's default, range and doc,
     so a CMD_INIT key that feeds the core is not declared a second time."""
     f = {f.name: f for f in dataclasses.fields(cls)}[name]
-    return Field(f.default, **f.metadata)
+    return Field(f.default, **{k: v for k, v in f.metadata.items() if k in _FIELD_KEYS})
 
 
 @functools.cache
