@@ -1,7 +1,7 @@
 """Validate a dict against a core dataclass and turn pydantic's errors into one ``field: message`` line.
 
 The dataclass is the single declaration: pydantic reads its fields' types and the range/doc metadata
-written with :func:`hal_panda_mobile.sim.spec.param`, and runs its ``__post_init__`` cross-field checks.
+written with :func:`robonix_common.params.param`, and runs its ``__post_init__`` cross-field checks.
 """
 
 from __future__ import annotations
