@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from nav2_wrapper.core import RangeScan
+from nav2_wrapper.core import Scan
 from robonix_api.dds import LaserScan, OccupancyGrid, Odometry, SimClock, TfBuffer, TfError
 from robonix_api.dds.convert import msg_to_grid
 from robonix_common.geometry import Pose2D, compose
@@ -169,7 +169,7 @@ class Inputs:
         p = compose(m_o.to_pose2d(), o_b.to_pose2d())
         return (float(p[0]), float(p[1]), float(p[2]))
 
-    def core_scan(self, msg: LaserScan, robot: Pose2D) -> tuple[RangeScan, Pose2D] | None:
+    def core_scan(self, msg: LaserScan, robot: Pose2D) -> tuple[Scan, Pose2D] | None:
         """The scan for the costmaps and the laser's pose in map at the scan's stamp (base ∘ base→laser)."""
         frame = msg.header.frame_id.lstrip("/") or self.frames.base
         try:
@@ -178,7 +178,7 @@ class Inputs:
             log.debug("no TF %s -> %s for the scan: %s", self.frames.base, frame, exc)
             return None
         sp = compose(self.pose_at(msg.header.stamp.to_sec(), robot), mount)
-        scan = RangeScan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
+        scan = Scan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
                         float(msg.range_min), float(msg.range_max))
         return scan, (float(sp[0]), float(sp[1]), float(sp[2]))
 

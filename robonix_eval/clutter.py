@@ -28,6 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from robonix_common.grid import merge_cells
+
 XY = tuple[float, float]
 Rect = tuple[float, float, float, float]   # x0, y0, x1, y1 (axis-aligned)
 
@@ -104,30 +106,12 @@ def post_field(rng: np.random.Generator, shape: tuple[int, int], fill: float, it
     return occ
 
 
-def merge_rows(occ: NDArray[np.bool_]) -> list[tuple[int, int, int, int]]:
-    """Occupied cells -> rectangles (row0, row1, col0, col1), half-open: horizontal runs stacked upward while
-    the run repeats exactly. Keeps the simulator's geom count far below one box per post."""
-    done: list[tuple[int, int, int, int]] = []
-    open_runs: dict[tuple[int, int], int] = {}
-    for r in range(occ.shape[0] + 1):
-        runs: set[tuple[int, int]] = set()
-        if r < occ.shape[0]:
-            edges = np.flatnonzero(np.diff(np.concatenate(([0], occ[r].astype(np.int8), [0]))))
-            runs = {(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)}
-        for run in list(open_runs):
-            if run not in runs:
-                done.append((open_runs.pop(run), r, run[0], run[1]))
-        for run in runs:
-            open_runs.setdefault(run, r)
-    return done
-
-
 def world_rects(posts: NDArray[np.bool_], spec: ClutterSpec) -> tuple[list[Rect], list[Rect]]:
     """Obstacle rectangles: the merged posts, and the three walls (as thick rectangles)."""
     c = spec.cell
     x_off = (spec.width - posts.shape[1] * c) / 2
     rects: list[Rect] = [(x_off + c0 * c, spec.field_y0 + r0 * c, x_off + c1 * c, spec.field_y0 + r1 * c)
-                         for r0, r1, c0, c1 in merge_rows(posts)]
+                         for r0, r1, c0, c1 in merge_cells(posts)]
     h = spec.wall / 2
     walls = [(-h, -h, spec.width + h, h), (-h, -h, h, spec.top), (spec.width - h, -h, spec.width + h, spec.top)]
     return rects, walls

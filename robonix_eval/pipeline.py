@@ -20,13 +20,14 @@ import numpy as np
 
 from hal_panda_mobile.files import load_robot_description, load_scene
 from hal_panda_mobile.sim import LidarNoise, OdomNoise, OdomState, PandaMobileSim
-from nav2_wrapper.core import Command, Navigator, RangeScan
+from nav2_wrapper.core import Command, Navigator
 from nav2_wrapper.core.mppi import MppiConfig
 from nav2_wrapper.core.navigator import TERMINAL
 from nav2_wrapper.params import load_params
 from robonix_common.geometry import Pose2D, compose
 from robonix_common.grid import GridMap
-from slam_service.core import Scan, SlamConfig, SlamEngine
+from robonix_common.scan import Scan
+from slam_service.core import SlamConfig, SlamEngine
 
 from .metrics import ShortestPaths, yaw_error
 
@@ -117,7 +118,7 @@ class Pipeline:
         self._step = 0
         self.odom: OdomState = self.sim.odometry()
         self.map_to_odom: Pose2D = (0.0, 0.0, 0.0)
-        self._scan: RangeScan | None = None
+        self._scan: Scan | None = None
         self._sensor_pose: Pose2D | None = None
         self._map_dirty = False
         self._map_sent_at = -math.inf
@@ -199,7 +200,7 @@ class Pipeline:
                                    self.mount, s.frame_id), (odom.x, odom.y, odom.yaw), s.stamp)
         self.map_to_odom = (float(u.map_to_odom[0]), float(u.map_to_odom[1]), float(u.map_to_odom[2]))
         self._map_dirty |= u.map_changed
-        self._scan = RangeScan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        self._scan = Scan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
         base = (compose(self.map_to_odom, (odom.x, odom.y, odom.yaw)) if self.options.nav_map == "slam"
                 else self.ground_truth_pose())
         sp = compose(base, self.mount)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from robonix_common.geometry import Pose2D
-from robonix_common.grid import GridMap
+from robonix_common.grid import GridMap, merge_cells
 
 from .errors import SimConfigError
 from .raster import rasterize, reachable
@@ -20,25 +20,6 @@ from .robot import RobotDescription
 from .scene import Box, Cylinder, Scene, Wall, first_collision
 
 ROBOT_CLEAR_RADIUS = 0.3  # half the robot width + margin: what a doorway must leave free
-
-
-def merge_cells(occ: np.ndarray) -> list[tuple[int, int, int, int]]:
-    """Occupied cells -> rectangles (row0, row1, col0, col1), half-open: runs per row, stacked upward
-    while the next row has exactly the same run. Far fewer geoms than one box per cell."""
-    done: list[tuple[int, int, int, int]] = []
-    open_runs: dict[tuple[int, int], int] = {}  # (c0, c1) -> first row
-    for r in range(occ.shape[0] + 1):
-        runs: set[tuple[int, int]] = set()
-        if r < occ.shape[0]:
-            row = np.concatenate(([False], occ[r], [False])).astype(np.int8)
-            edges = np.flatnonzero(np.diff(row))
-            runs = {(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)}
-        for run in list(open_runs):
-            if run not in runs:
-                done.append((open_runs.pop(run), r, run[0], run[1]))
-        for run in runs:
-            open_runs.setdefault(run, r)
-    return done
 
 
 def _free_start(grid: GridMap, free: np.ndarray) -> tuple[float, float]:

@@ -6,7 +6,7 @@ are read by ``nav2_wrapper.robot_io`` and ``nav2_wrapper.params``, which pass th
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, ControlOutput, HolonomicController
-from .costmap import Costmap, CostmapConfig, ObservationSource, RangeScan
+from .costmap import Costmap, CostmapConfig, ObservationSource, Scan
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint
 from .navigator import Command, GoalRecord, NavConfig, Navigator, NavigatorConfig, validate_goal
@@ -17,6 +17,6 @@ __all__ = [
     "FREE", "INSCRIBED", "LETHAL", "NO_INFORMATION", "Command", "ControlOutput", "ControllerConfig", "Costmap",
     "CostmapConfig", "Footprint", "GlobalPlanner", "GoalChecker", "GoalCheckerConfig", "GoalRecord",
     "HolonomicController", "NavConfig", "Navigator", "NavigatorConfig", "ObservationSource",
-    "PlanResult", "PlannerConfig", "ProgressChecker", "ProgressCheckerConfig", "RangeScan", "RecoveryConfig",
+    "PlanResult", "PlannerConfig", "ProgressChecker", "ProgressCheckerConfig", "Scan", "RecoveryConfig",
     "RecoverySequence", "inflation_cost", "validate_goal",
 ]

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
 from robonix_common.params import param
+from robonix_common.scan import Scan
 
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint
@@ -63,17 +64,6 @@ class CostmapConfig:
                                        gt=0)
     inflate_unknown: bool = param(False, "inflation also raises the cost of unknown cells")
     observation_sources: list[ObservationSource] = field(default_factory=lambda: [ObservationSource()])
-
-
-@dataclass
-class RangeScan:
-    """The fields of a planar laser scan the obstacle layer needs (what a sensor_msgs/LaserScan carries)."""
-
-    ranges: NDArray[np.float64]
-    angle_min: float
-    angle_increment: float
-    range_min: float = 0.0
-    range_max: float = float("inf")
 
 
 def static_costs(grid: NDArray[np.int8], cfg: CostmapConfig) -> NDArray[np.uint8]:
@@ -229,7 +219,7 @@ class Costmap:
         self._recompute(0, rows, 0, cols)
 
     # ---- obstacle layer ---------------------------------------------------------------------------
-    def update_scan(self, scan: RangeScan, sensor_pose: NDArray | Pose2D) -> None:
+    def update_scan(self, scan: Scan, sensor_pose: NDArray | Pose2D) -> None:
         """Ray-trace clearing then marking (Nav2 order) for every observation source, in the costmap frame."""
         if not self.cfg.obstacle_layer or not self.cfg.observation_sources:
             return

@@ -18,10 +18,11 @@ import numpy as np
 from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
 from robonix_common.params import param
+from robonix_common.scan import Scan
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, HolonomicController
-from .costmap import Costmap, CostmapConfig, RangeScan
+from .costmap import Costmap, CostmapConfig
 from .costs import INSCRIBED, LETHAL
 from .footprint import Footprint
 from .mppi import MppiConfig, MppiController
@@ -203,7 +204,7 @@ class Navigator:
 
     # ---- the tick ---------------------------------------------------------------------------------
     def tick(self, now: float, pose: Pose2D, vel: tuple[float, float, float] = (0.0, 0.0, 0.0),
-             grid: GridMap | None = None, scan: RangeScan | None = None,
+             grid: GridMap | None = None, scan: Scan | None = None,
              sensor_pose: Pose2D | None = None) -> Command:
         """Fold in new data, advance the active goal, and return the velocity command (body frame)."""
         dt = (now - self._last_tick) if self._last_tick is not None else 1.0 / self.cfg.navigator.controller_frequency
@@ -221,7 +222,7 @@ class Navigator:
             return self._zero(rec)
         return self._run(rec, now, pose, vel, dt)
 
-    def _update_costmaps(self, pose: Pose2D, grid: GridMap | None, scan: RangeScan | None,
+    def _update_costmaps(self, pose: Pose2D, grid: GridMap | None, scan: Scan | None,
                          sensor_pose: Pose2D | None) -> None:
         if grid is not None:
             self._map = grid

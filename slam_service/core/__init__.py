@@ -3,6 +3,8 @@
 Session files are :mod:`slam_service.session_io`; the PNG map card is :mod:`slam_service.render`.
 """
 
+from robonix_common.scan import Scan
+
 from .engine import SlamEngine
 from .lookup import LookupGrid
 from .matcher import MatchResult, match_scan
@@ -11,7 +13,7 @@ from .occupancy import LogOddsGrid
 from .posegraph import PoseGraph
 from .preprocess import PreparedScan, ScanError, prepare_scan
 from .session import SessionData
-from .types import Scan, SlamConfig, SlamStats, Update
+from .types import SlamConfig, SlamStats, Update
 
 __all__ = [
     "LogOddsGrid", "LookupGrid", "MatchResult", "PoseGraph", "PreparedScan", "Scan", "ScanError", "SessionData",

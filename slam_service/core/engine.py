@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from robonix_common.geometry import PoseArray, compose, inverse, relative, transform_points
 from robonix_common.grid import GridMap
+from robonix_common.scan import Scan
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
@@ -26,7 +27,7 @@ from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
 from .preprocess import ScanError, prepare_scan
 from .session import SessionData
-from .types import Scan, SlamConfig, SlamStats, Update, as_pose
+from .types import SlamConfig, SlamStats, Update, as_pose
 
 log = logging.getLogger(__name__)
 Mode = Literal["mapping", "localization"]

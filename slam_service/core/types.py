@@ -6,7 +6,6 @@ import math
 from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
-from numpy.typing import NDArray
 
 from robonix_common.geometry import PoseArray
 from robonix_common.params import ParamError, check_ranges, param
@@ -21,27 +20,6 @@ def as_pose(p: object, name: str = "pose") -> PoseArray:
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be 3 finite numbers (x, y, theta), got {p!r}")
     return a
-
-
-@dataclass
-class Scan:
-    """One planar lidar sweep. ``mount`` is the lidar pose in the robot base frame (x, y, yaw)."""
-
-    ranges: NDArray[np.float32]
-    angle_min: float
-    angle_increment: float
-    range_min: float = 0.05
-    range_max: float = 12.0
-    stamp: float = 0.0
-    mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    frame_id: str = "laser"
-
-    def __post_init__(self) -> None:
-        self.ranges = np.asarray(self.ranges, dtype=np.float32).reshape(-1)
-
-    @property
-    def angles(self) -> NDArray[np.float64]:
-        return self.angle_min + self.angle_increment * np.arange(self.ranges.size, dtype=np.float64)
 
 
 @dataclass

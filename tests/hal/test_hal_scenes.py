@@ -13,9 +13,9 @@ from hal_panda_mobile.files import available_scenes, load_robot_description, loa
 from hal_panda_mobile.sim import OdomNoise, PandaMobileSim, SimConfigError
 from hal_panda_mobile.sim.raster import rasterize, reachable
 from hal_panda_mobile.sim.scene import first_collision
-from hal_panda_mobile.sim.worldgen import ROBOT_CLEAR_RADIUS, merge_cells
+from hal_panda_mobile.sim.worldgen import ROBOT_CLEAR_RADIUS
 from robonix_api.mapfile import save_map_yaml
-from robonix_common.grid import FREE, OCCUPIED, GridMap
+from robonix_common.grid import FREE, OCCUPIED, GridMap, merge_cells
 
 from .conftest import make_sim, ray_distances, room
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import Costmap, CostmapConfig, Navigator, RangeScan
+from nav2_wrapper.core import Costmap, CostmapConfig, Navigator, Scan
 from nav2_wrapper.core.costs import LETHAL
 from nav2_wrapper.params import load_params
 
@@ -25,7 +25,7 @@ def noisy(std: float, dropout: float, seed: int = 0):
         hit = np.isfinite(r)
         r[hit] += rng.normal(0.0, std, int(hit.sum()))
         r[rng.random(len(r)) < dropout] = np.inf
-        return RangeScan(r, s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        return Scan(r, s.angle_min, s.angle_increment, s.range_min, s.range_max)
 
     return scan
 
@@ -72,7 +72,7 @@ def test_dropout_never_clears_and_too_close_is_not_free() -> None:
     cm.obstacle[60, 70] = LETHAL     # a mark 0.5 m east of the sensor at (3.0, 3.0)
     cm.obstacle[60, 50] = LETHAL     # and one 0.5 m west
     ranges = np.array([np.inf, -np.inf])  # beam 0 east (dropout), beam 1 west (too close)
-    cm.update_scan(RangeScan(ranges, 0.0, math.pi, 0.05, 12.0), (3.025, 3.025, 0.0))
+    cm.update_scan(Scan(ranges, 0.0, math.pi, 0.05, 12.0), (3.025, 3.025, 0.0))
     assert cm.obstacle[60, 70] != LETHAL
     assert cm.obstacle[60, 50] == LETHAL
 
