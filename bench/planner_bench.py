@@ -39,11 +39,11 @@ from nav2_wrapper.core import (
     ControllerConfig,
     Costmap,
     CostmapConfig,
-    Footprint,
     GlobalPlanner,
     HolonomicController,
     PlannerConfig,
 )
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
 Cell = tuple[int, int]
@@ -160,7 +160,7 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
 def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float],
                           steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     local = Costmap(CostmapConfig(name="local", rolling_window=True, width=4.0, height=4.0, obstacle_layer=False,
                                   cost_scaling_factor=3.0, inflation_radius=0.55, footprint=fp))
     grid = GridMap(np.where(cm.static == 254, 100, 0).astype(np.int8), RES)
@@ -198,7 +198,7 @@ def main() -> None:
     except ImportError:
         print("pyastar2d is not installed (pip install -c constraints.txt -e '.[bench]'): no peer in this run")
         use_peer = False
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     planner = GlobalPlanner(PlannerConfig(heuristic_weight=args.weight))
     results: dict = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
                      "load_avg_at_start": os.getloadavg()[0], "pairs": args.pairs, "size": args.size,

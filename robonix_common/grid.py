@@ -63,3 +63,22 @@ class GridMap:
     def in_bounds(self, col: NDArray | int, row: NDArray | int) -> NDArray[np.bool_]:
         col, row = np.asarray(col), np.asarray(row)
         return (col >= 0) & (col < self.width) & (row >= 0) & (row < self.height)
+
+
+def merge_cells(occ: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """Occupied cells -> rectangles (row0, row1, col0, col1), half-open: runs per row, stacked upward
+    while the next row has exactly the same run. Far fewer geoms than one box per cell."""
+    done: list[tuple[int, int, int, int]] = []
+    open_runs: dict[tuple[int, int], int] = {}  # (c0, c1) -> first row
+    for r in range(occ.shape[0] + 1):
+        runs: set[tuple[int, int]] = set()
+        if r < occ.shape[0]:
+            row = np.concatenate(([False], occ[r], [False])).astype(np.int8)
+            edges = np.flatnonzero(np.diff(row))
+            runs = {(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)}
+        for run in list(open_runs):
+            if run not in runs:
+                done.append((open_runs.pop(run), r, run[0], run[1]))
+        for run in runs:
+            open_runs.setdefault(run, r)
+    return done

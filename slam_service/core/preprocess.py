@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .types import Scan
+from robonix_common.scan import Scan
 
 
 class ScanError(ValueError):

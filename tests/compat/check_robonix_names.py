@@ -10,10 +10,11 @@ import ast
 import importlib
 import json
 import sys
+from pathlib import Path
 
 
 def check(path, checked, missing):
-    tree = ast.parse(open(path).read(), path)
+    tree = ast.parse(Path(path).read_text(), path)
     import robonix_api
 
     providers = {}

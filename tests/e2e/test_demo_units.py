@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.demo_goals import Goal, choose_goals, parse_detail, path_length
-from rbnx.demo_report import GoalResult, goals_exit_code, print_table
+from rbnx.demo.goals import Goal, choose_goals, parse_detail, path_length
+from rbnx.demo.report import GoalResult, goals_exit_code, print_table
 
 from .conftest import e2e_env, rbnx_cmd
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.demo_boot import pick_domain_id
-from rbnx.statefile import state_path
+from rbnx.boot.statefile import state_path
+from rbnx.demo.boot import pick_domain_id
 
 from .conftest import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 

@@ -12,11 +12,12 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, Footprint, GlobalPlanner, PlannerConfig
+from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
 RES = 0.05
-FP = Footprint.from_robot_yaml()
+FP = load_footprint()
 
 
 def random_costmap(rng: np.random.Generator, rows: int = 48, cols: int = 64, boxes: int = 10) -> Costmap:

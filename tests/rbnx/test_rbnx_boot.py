@@ -278,7 +278,8 @@ def test_start_one_package_against_running_atlas(tmp_path: Path, minimal: tuple[
         atlas = boot.state()["atlas"]
         out = tmp_path / "start.out"
         with open(out, "w") as fh:
-            start = subprocess.Popen(rbnx_cmd() + ["--atlas", atlas, "start", "-p", str(deploy.parent / "odom_primitive"),
+            start = subprocess.Popen(rbnx_cmd() + ["--atlas", atlas, "start",
+                                                   "-p", str(deploy.parent / "odom_primitive"),
                                                    "--name", "odom_extra", "--kind", "primitive", "-s", "topic=/odom2",
                                                    "--log-dir", str(tmp_path / "startlogs"), "--no-progress"],
                                      env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.backoff import Backoff
+from rbnx.boot.backoff import Backoff
+from rbnx.boot.procs import group_members, pid_alive, run_hook, spawn
+from rbnx.boot.progress import ProgressView, Row, plain_line, render_table
+from rbnx.boot.statefile import read_state, state_path, write_state
 from rbnx.envexpand import UndefinedVariable, apply_env_section, expand_str, expand_tree
-from rbnx.procs import group_members, pid_alive, run_hook, spawn
-from rbnx.progress import ProgressView, Row, plain_line, render_table
-from rbnx.statefile import read_state, state_path, write_state
 
 
 def test_expand_forms() -> None:
@@ -118,7 +118,8 @@ def test_spawned_group_stops_with_grandchildren(tmp_path: Path) -> None:
 
 
 def test_stop_escalates_to_kill(tmp_path: Path) -> None:
-    code = "import signal,time,sys; signal.signal(signal.SIGTERM, signal.SIG_IGN); print('up', flush=True); time.sleep(60)"
+    code = ("import signal,time,sys; signal.signal(signal.SIGTERM, signal.SIG_IGN); print('up', flush=True); "
+            "time.sleep(60)")
     g = spawn("t", [sys.executable, "-c", code], tmp_path, os.environ, tmp_path / "t.log")
     for _ in range(400):
         if "up" in (tmp_path / "t.log").read_text():
