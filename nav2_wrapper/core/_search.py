@@ -176,10 +176,10 @@ def _key(g, h, inv, cb, mask):
 
 
 @njit(cache=True, inline="always")
-def _relax(rec, recg, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
-    """Give cell ``nb`` = (nr, nc) g = ``ng`` if that is better, appending it to the bucket of its f (the
-    heuristic is only computed then: most relaxations fail). Returns that bucket's new length, 0 if nothing
-    changed. The caller guarantees room in the bucket."""
+def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
+    """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better, appending it to the
+    bucket of its f (the heuristic is only computed then: most relaxations fail). Returns that bucket's new
+    length, 0 if nothing was appended. The caller guarantees room in the bucket."""
     st = rec[2 * nb]
     if st >= seen:                  # seen or closed in this plan
         old = np.float64(recg[2 * nb + 1])
@@ -187,6 +187,7 @@ def _relax(rec, recg, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buck
             return 0
         rec[2 * nb] = seen
         recg[2 * nb + 1] = ng
+        dirs[nb] = k
         h = h_scale * _octile(nr, nc, gr, gc)
         key = _key(ng, h, inv, cb, mask)
         if st == seen and _key(old, h, inv, cb, mask) == key:
@@ -194,6 +195,7 @@ def _relax(rec, recg, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buck
     else:
         rec[2 * nb] = seen
         recg[2 * nb + 1] = ng
+        dirs[nb] = k
         key = _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
     n = counts[key]
     buckets[key, n] = nb
@@ -212,7 +214,20 @@ def _room(buckets, need):
 
 
 @njit(cache=True)
-def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
+def _behind_masks(drs, dcs):
+    """Per arrival move a (index 8 = none): bit k set when neighbour k lies behind a (negative dot product).
+    From the predecessor p = cell − a, each such neighbour is p itself or one move from p that costs less
+    than going through the cell, so relaxing it from the cell can never help."""
+    behind = np.zeros(9, np.int64)
+    for a in range(8):
+        for k in range(8):
+            if drs[k] * drs[a] + dcs[k] * dcs[a] < 0:
+                behind[a] |= 1 << k
+    return behind
+
+
+@njit(cache=True)
+def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
@@ -224,8 +239,10 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     a cell with a smaller f, all of which are done; the goal's g is exact once its bucket is emptied.
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
-    diagonal-squeeze test. Same record layout and return value as ``astar``; on failure every cell
-    reachable from the start is closed.
+    diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
+    g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
+    directly by a move costing less than any detour through this cell. Same record layout and return value
+    as ``astar``; on failure every cell reachable from the start is closed.
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -241,7 +258,7 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     heads = np.zeros(nbuckets, np.int64)
     rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    fullest = _relax(rec, recg, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
+    fullest = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
     pending = 1
     far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
     # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
@@ -249,6 +266,7 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
     offs = drs * cols + dcs
     fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
+    behind = _behind_masks(drs, dcs)
     expansions = 0
     while pending > 0:
         b = cb & mask
@@ -267,7 +285,10 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
             if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
+                skip = behind[dirs[cur]]
                 for k in range(8):
+                    if (skip >> k) & 1:
+                        continue
                     if k < 4:
                         f = fo[k]
                     elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
@@ -276,8 +297,8 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
                         f = SQRT2 * table[flat[cur + offs[k]]]
                     if f == np.inf:
                         continue
-                    n = _relax(rec, recg, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc, h_scale,
-                               inv, cb, mask, buckets, counts)
+                    n = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
+                               h_scale, inv, cb, mask, buckets, counts)
                     pending += n > 0
                     fullest = max(fullest, n)
             else:
@@ -288,8 +309,8 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
                     f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
                     if f == np.inf:
                         continue
-                    n = _relax(rec, recg, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask,
-                               buckets, counts)
+                    n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb,
+                               mask, buckets, counts)
                     pending += n > 0
                     fullest = max(fullest, n)
         heads[b] = 0

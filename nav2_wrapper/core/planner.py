@@ -95,6 +95,7 @@ class GlobalPlanner:
         """An 8-byte search record per cell (see ``_search``), reused between plans via stamps."""
         if n != self._size:
             self._rec = np.zeros(2 * n, np.int32)
+            self._dirs = np.zeros(n, np.int8)    # the move that last gave each cell its g (bucket kernel)
             self._size, self._stamp = n, 0
         self._next_stamp()
 
@@ -155,9 +156,9 @@ class GlobalPlanner:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
         if self.cfg.heuristic_weight == 1.0:
-            found, expansions = _search.astar_buckets(search.costs, search.table, search.start, target, self._rec,
-                                                      self._stamp, search.esc_r2, search.esc_cost, search.h_scale,
-                                                      BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
+            found, expansions = _search.astar_buckets(
+                search.costs, search.table, search.start, target, self._rec, self._dirs, self._stamp, search.esc_r2,
+                search.esc_cost, search.h_scale, BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
         else:
             found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec,
                                               self._stamp, search.esc_r2, search.esc_cost, self.cfg.heuristic_weight,
