@@ -214,6 +214,50 @@ def _room(buckets, need):
 
 
 @njit(cache=True)
+def _side_moves(drs, dcs):
+    """Per arrival move a: the two neighbours beside it (dot product 0, same kind of move as a), and for a
+    diagonal a the orthogonal neighbour m through which the predecessor reaches that side cell in two
+    orthogonal moves (-1 where unused; row 8 = no arrival move)."""
+    sides = np.full((9, 2), -1, np.int64)
+    mids = np.full((9, 2), -1, np.int64)
+    for a in range(8):
+        j = 0
+        for k in range(8):
+            if (k < 4) == (a < 4) and k != a and drs[k] * drs[a] + dcs[k] * dcs[a] == 0:
+                sides[a, j] = k
+                if a >= 4:   # m = the side cell minus the component it shares with a
+                    mr = 0 if drs[k] == drs[a] else drs[k]
+                    mc = 0 if dcs[k] == dcs[a] else dcs[k]
+                    for q in range(4):
+                        if drs[q] == mr and dcs[q] == mc:
+                            mids[a, j] = q
+                j += 1
+    return sides, mids
+
+
+@njit(cache=True, inline="always")
+def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
+    """Bit mask of the neighbours of ``cur`` not worth relaxing, given the move ``d`` that gave it its g: the
+    ones behind it (``behind``), and the side neighbours the predecessor reaches strictly cheaper without
+    this cell: after an orthogonal arrival by the diagonal move from the predecessor (√2·w(n) < w(cell) +
+    w(n)); after a diagonal one by two orthogonal moves through m (w(m) + w(n) < √2·(w(cell) + w(n)))."""
+    skip = behind[d]
+    if d == 8:
+        return skip
+    wc = table[flat[cur]]
+    for j in range(2):
+        k = sides[d, j]
+        if d < 4:
+            if SQRT2 * fo[k] < wc + fo[k]:
+                skip |= 1 << k
+        else:
+            wn = table[flat[cur + offs[k]]]
+            if fo[mids[d, j]] + wn < SQRT2 * (wc + wn):
+                skip |= 1 << k
+    return skip
+
+
+@njit(cache=True)
 def _behind_masks(drs, dcs):
     """Per arrival move a (index 8 = none): bit k set when neighbour k lies behind a (negative dot product).
     From the predecessor p = cell − a, each such neighbour is p itself or one move from p that costs less
@@ -241,8 +285,10 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
     g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
-    directly by a move costing less than any detour through this cell. Same record layout and return value
-    as ``astar``; on failure every cell reachable from the start is closed.
+    directly by a move costing less than any detour through this cell; nor of the two side neighbours when
+    p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
+    path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
+    reachable from the start is closed.
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -267,6 +313,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     offs = drs * cols + dcs
     fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
     behind = _behind_masks(drs, dcs)
+    sides, mids = _side_moves(drs, dcs)
     expansions = 0
     while pending > 0:
         b = cb & mask
@@ -285,7 +332,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
             if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
-                skip = behind[dirs[cur]]
+                skip = _prune(dirs[cur], behind, sides, mids, fo, table, flat, cur, offs)
                 for k in range(8):
                     if (skip >> k) & 1:
                         continue
