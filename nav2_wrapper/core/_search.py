@@ -215,32 +215,47 @@ def _room(buckets, need):
 
 @njit(cache=True)
 def _side_moves(drs, dcs):
-    """Per arrival move a: the two neighbours beside it (dot product 0, same kind of move as a), and for a
-    diagonal a the orthogonal neighbour m through which the predecessor reaches that side cell in two
-    orthogonal moves (-1 where unused; row 8 = no arrival move)."""
-    sides = np.full((9, 2), -1, np.int64)
-    mids = np.full((9, 2), -1, np.int64)
+    """Per arrival move a (row 8 = none; -1 where unused), columns 0-1: the two neighbours beside a (dot
+    product 0, same kind of move as a), with for a diagonal a the orthogonal neighbour m through which the
+    predecessor reaches that side cell by two orthogonal moves; columns 2-3, for an orthogonal a: the two
+    forward diagonals, with the side cell s through which the predecessor reaches them diagonal-first."""
+    sides = np.full((9, 4), -1, np.int64)
+    mids = np.full((9, 4), -1, np.int64)
     for a in range(8):
         j = 0
+        f = 2
         for k in range(8):
-            if (k < 4) == (a < 4) and k != a and drs[k] * drs[a] + dcs[k] * dcs[a] == 0:
+            dot = drs[k] * drs[a] + dcs[k] * dcs[a]
+            if (k < 4) == (a < 4) and k != a and dot == 0:
                 sides[a, j] = k
                 if a >= 4:   # m = the side cell minus the component it shares with a
-                    mr = 0 if drs[k] == drs[a] else drs[k]
-                    mc = 0 if dcs[k] == dcs[a] else dcs[k]
-                    for q in range(4):
-                        if drs[q] == mr and dcs[q] == mc:
-                            mids[a, j] = q
+                    mids[a, j] = _orth_index(drs, dcs, 0 if drs[k] == drs[a] else drs[k],
+                                             0 if dcs[k] == dcs[a] else dcs[k])
                 j += 1
+            elif a < 4 and k >= 4 and dot > 0:
+                sides[a, f] = k
+                mids[a, f] = _orth_index(drs, dcs, drs[k] - drs[a], dcs[k] - dcs[a])
+                f += 1
     return sides, mids
+
+
+@njit(cache=True, inline="always")
+def _orth_index(drs, dcs, dr, dc):
+    for q in range(4):
+        if drs[q] == dr and dcs[q] == dc:
+            return q
+    return -1
 
 
 @njit(cache=True, inline="always")
 def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
     """Bit mask of the neighbours of ``cur`` not worth relaxing, given the move ``d`` that gave it its g: the
-    ones behind it (``behind``), and the side neighbours the predecessor reaches strictly cheaper without
-    this cell: after an orthogonal arrival by the diagonal move from the predecessor (√2·w(n) < w(cell) +
-    w(n)); after a diagonal one by two orthogonal moves through m (w(m) + w(n) < √2·(w(cell) + w(n)))."""
+    ones behind it (``behind``); the side neighbours the predecessor reaches strictly cheaper without this
+    cell: after an orthogonal arrival by the diagonal move from the predecessor (√2·w(n) < w(cell) + w(n)),
+    after a diagonal one by two orthogonal moves through m (w(m) + w(n) < √2·(w(cell) + w(n))); and after
+    an orthogonal arrival the forward diagonals the predecessor reaches at no more cost diagonal-first
+    through the side cell s (√2·w(s) + w(n) ≤ w(cell) + √2·w(n)): the canonical order of grid paths, ties
+    go to the diagonal-first one, which is never pruned itself (from s, n is straight ahead)."""
     skip = behind[d]
     if d == 8:
         return skip
@@ -249,6 +264,10 @@ def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
         k = sides[d, j]
         if d < 4:
             if SQRT2 * fo[k] < wc + fo[k]:
+                skip |= 1 << k
+            k = sides[d, 2 + j]
+            wn = table[flat[cur + offs[k]]]
+            if SQRT2 * fo[mids[d, 2 + j]] + wn <= wc + SQRT2 * wn:
                 skip |= 1 << k
         else:
             wn = table[flat[cur + offs[k]]]
