@@ -81,11 +81,14 @@ def centre(cm: Costmap, cell: np.ndarray) -> tuple[float, float]:
     return float(x), float(y)
 
 
-@pytest.mark.parametrize("seed", range(6))
-def test_cost_equals_plain_dijkstra_on_random_maps(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "multiplier", "boxes"), [(s, 2.0, 10) for s in range(6)]
+                         + [(s, 0.0, 3) for s in range(6, 9)] + [(s, 2.0, 2) for s in range(9, 11)])
+def test_cost_equals_plain_dijkstra_on_random_maps(seed: int, multiplier: float, boxes: int) -> None:
+    """Cluttered maps, and open ones (multiplier 0: every free cell costs 1, so equal-cost paths abound and
+    the kernel's pruning of moves with an equally cheap canonical alternative is exercised hardest)."""
     rng = np.random.default_rng(seed)
-    cm = random_costmap(rng)
-    cfg = PlannerConfig(heuristic_weight=1.0, smooth_path=seed % 2 == 0)
+    cm = random_costmap(rng, boxes=boxes)
+    cfg = PlannerConfig(heuristic_weight=1.0, smooth_path=seed % 2 == 0, cost_travel_multiplier=multiplier)
     planner = GlobalPlanner(cfg)
     table = planner.traversal_table()
     esc_r2 = (cfg.escape_radius / RES) ** 2
