@@ -5,26 +5,13 @@ from __future__ import annotations
 import pytest
 
 from atlas.catalogue import Catalogue, build_descriptor
+from robonix_api import types as rt
 from robonix_api.contracts import load_catalogue
 from robonix_api.proto_gen import atlas_pb2
-from robonix_api.types import (
-    Capability,
-    CapabilityProvider,
-    ContractDescriptor,
-    FieldSpec,
-    GrpcParams,
-    Kind,
-    LifecycleState,
-    McpParams,
-    Ros2Params,
-    Transport,
-    params_from_pb,
-    params_to_pb,
-)
 
 
 def test_enum_values_match_proto() -> None:
-    for enum, prefix in ((Kind, "KIND_"), (Transport, "TRANSPORT_"), (LifecycleState, "STATE_")):
+    for enum, prefix in ((rt.Kind, "KIND_"), (rt.Transport, "TRANSPORT_"), (rt.LifecycleState, "STATE_")):
         for member in enum:
             assert getattr(atlas_pb2, prefix + member.name) == member.value
 
@@ -32,15 +19,15 @@ def test_enum_values_match_proto() -> None:
 @pytest.mark.parametrize(
     ("enum", "value", "expected"),
     [
-        (Transport, "ros2", Transport.ROS2),
-        (Transport, "TRANSPORT_GRPC", Transport.GRPC),
-        (Transport, 3, Transport.MCP),
-        (Transport, None, Transport.UNSPECIFIED),
-        (Kind, "Primitive", Kind.PRIMITIVE),
-        (Kind, "KIND_SKILL", Kind.SKILL),
-        (LifecycleState, "active", LifecycleState.ACTIVE),
-        (LifecycleState, "STATE_TERMINATED", LifecycleState.TERMINATED),
-        (LifecycleState, LifecycleState.ERROR, LifecycleState.ERROR),
+        (rt.Transport, "ros2", rt.Transport.ROS2),
+        (rt.Transport, "TRANSPORT_GRPC", rt.Transport.GRPC),
+        (rt.Transport, 3, rt.Transport.MCP),
+        (rt.Transport, None, rt.Transport.UNSPECIFIED),
+        (rt.Kind, "Primitive", rt.Kind.PRIMITIVE),
+        (rt.Kind, "KIND_SKILL", rt.Kind.SKILL),
+        (rt.LifecycleState, "active", rt.LifecycleState.ACTIVE),
+        (rt.LifecycleState, "STATE_TERMINATED", rt.LifecycleState.TERMINATED),
+        (rt.LifecycleState, rt.LifecycleState.ERROR, rt.LifecycleState.ERROR),
     ],
 )
 def test_enum_parse(enum, value, expected) -> None:
@@ -49,52 +36,52 @@ def test_enum_parse(enum, value, expected) -> None:
 
 def test_enum_parse_errors() -> None:
     with pytest.raises(ValueError, match="ros3"):
-        Transport.parse("ros3")
+        rt.Transport.parse("ros3")
     with pytest.raises(ValueError, match="Kind: unknown value 7"):
-        Kind.parse(7)
+        rt.Kind.parse(7)
     with pytest.raises(TypeError):
-        Kind.parse(1.5)
+        rt.Kind.parse(1.5)
 
 
 @pytest.mark.parametrize(
-    "params", [GrpcParams("f.proto", "Svc", "M"), Ros2Params("reliable"), McpParams("{}"), None]
+    "params", [rt.GrpcParams("f.proto", "Svc", "M"), rt.Ros2Params("reliable"), rt.McpParams("{}"), None]
 )
 def test_params_roundtrip(params) -> None:
-    assert params_from_pb(params_to_pb(params)) == params
+    assert rt.params_from_pb(rt.params_to_pb(params)) == params
 
 
 def test_provider_roundtrip() -> None:
-    cap = Capability("p", Kind.SERVICE, "c/x", Transport.MCP, McpParams("{}"), "d", True)
-    prov = CapabilityProvider(
-        "p", Kind.SERVICE, "ns", "md", 5, LifecycleState.ACTIVE, "ok", [cap], "# md", "rid"
+    cap = rt.Capability("p", rt.Kind.SERVICE, "c/x", rt.Transport.MCP, rt.McpParams("{}"), "d", True)
+    prov = rt.CapabilityProvider(
+        "p", rt.Kind.SERVICE, "ns", "md", 5, rt.LifecycleState.ACTIVE, "ok", [cap], "# md", "rid"
     )
     wire = prov.to_pb().SerializeToString()
-    assert CapabilityProvider.from_pb(atlas_pb2.CapabilityProvider.FromString(wire)) == prov
+    assert rt.CapabilityProvider.from_pb(atlas_pb2.CapabilityProvider.FromString(wire)) == prov
 
 
 def test_descriptor_roundtrip_and_fields() -> None:
     cat = Catalogue.load()
     for desc in cat.list():
-        assert ContractDescriptor.from_pb(desc.to_pb()) == desc
+        assert rt.ContractDescriptor.from_pb(desc.to_pb()) == desc
     odom = cat.get("robonix/primitive/chassis/odom")
     assert odom.io_msg_type == "nav_msgs/msg/Odometry"
     assert odom.io_srv_type == ""
-    assert odom.msg_fields[0] == FieldSpec("header", "std_msgs/Header", False)
+    assert odom.msg_fields[0] == rt.FieldSpec("header", "std_msgs/Header", False)
     scan = {f.name: f for f in cat.get("robonix/primitive/lidar/lidar").msg_fields}
-    assert scan["ranges"] == FieldSpec("ranges", "float32", True, True, 0)
+    assert scan["ranges"] == rt.FieldSpec("ranges", "float32", True, True, 0)
     assert scan["angle_min"].type_name == "float32"
     grid = {f.name: f for f in cat.get("robonix/service/map/occupancy_grid").msg_fields}
-    assert grid["data"] == FieldSpec("data", "int8", True, True, 0)
+    assert grid["data"] == rt.FieldSpec("data", "int8", True, True, 0)
     assert grid["info"].type_name == "nav_msgs/MapMetaData"
     nav = cat.get("robonix/service/navigation/navigate")
     assert nav.io_srv_type == "navigation/srv/Navigate"
     assert nav.msg_fields == ()
-    assert nav.srv_request_fields == (FieldSpec("goal", "geometry_msgs/PoseStamped", False),)
+    assert nav.srv_request_fields == (rt.FieldSpec("goal", "geometry_msgs/PoseStamped", False),)
     assert [f.name for f in nav.srv_response_fields] == ["accepted", "run_id", "detail"]
     driver = cat.get("robonix/lifecycle/driver")
     assert driver.cross_namespace
-    assert driver.kind == Kind.SERVICE
-    assert driver.srv_request_fields[0] == FieldSpec("command", "uint8", True)
+    assert driver.kind == rt.Kind.SERVICE
+    assert driver.srv_request_fields[0] == rt.FieldSpec("command", "uint8", True)
 
 
 def test_every_contract_resolves_to_generated_types(caplog: pytest.LogCaptureFixture) -> None:
