@@ -25,7 +25,8 @@ REPO = Path(__file__).resolve().parents[2]
 HAL = [sys.executable, "-m", "hal_panda_mobile"]
 SLAM = [sys.executable, "-m", "slam_service"]
 NAV = [sys.executable, "-m", "nav2_wrapper.atlas_bridge"]
-MAP_PROVIDER = [sys.executable, str(REPO / "tests" / "nav_provider" / "map_provider.py")]  # stand-in map service
+# the stand-in map service of the navigation tests
+MAP_PROVIDER = [sys.executable, str(REPO / "tests" / "integration" / "nav2_wrapper" / "map_provider.py")]
 INIT, ACTIVATE, DEACTIVATE, SHUTDOWN = 0, 1, 2, 3
 
 

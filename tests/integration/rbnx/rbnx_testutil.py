@@ -11,7 +11,7 @@ from pathlib import Path
 
 from support.procs import alive, wait_until  # noqa: F401  (alive re-exported)
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 MINIMAL = REPO / "examples" / "minimal"
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 SKIP_DIRS = {".git", ".venv", "venv", "node_modules", "rbnx-logs"}
 
 

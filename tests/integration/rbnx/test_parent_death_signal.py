@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.procs import wait_until
+from support.procs import wait_until
 
 # The child records the signal it got into a file and exits; the parent starts it and then waits forever.
 CHILD = r"""

@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from rbnx_testutil import alive, copy_minimal, group_alive, make_env, rbnx_cmd, run, wait_for
+
+from .rbnx_testutil import alive, copy_minimal, group_alive, make_env, rbnx_cmd, run, wait_for
 
 pytestmark = pytest.mark.integration
 SUMMARY = "boot: 2/2 entries ready"

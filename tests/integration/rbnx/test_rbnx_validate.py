@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rbnx_testutil import MINIMAL, copy_minimal, make_env, run
+from .rbnx_testutil import MINIMAL, copy_minimal, make_env, run
 
 
 def test_examples_validate(tmp_path: Path) -> None:

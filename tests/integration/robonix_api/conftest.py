@@ -1,4 +1,5 @@
-"""Fixtures for the SDK tests: a recording fake atlas (unit tests) and the real atlas server."""
+"""Fixtures for the SDK and DDS tests: a recording fake atlas, the real atlas server, a DDS node per test and
+the helper publisher process (tests/integration/robonix_api/dds_fixtures.py)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ from typing import Any
 import pytest
 from support.fakes import FakeAtlas, FakeRpcError  # noqa: F401  (re-exported for the sdk tests)
 from support.procs import wait_until  # noqa: F401  (re-exported for the sdk tests)
+
+from .dds_fixtures import node, peer  # noqa: F401  (fixtures of the DDS tests)
 
 
 @pytest.fixture

@@ -8,11 +8,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from dds_helpers import stop_process
 
 from robonix_api.dds import DdsNode
 
-PEER = Path(__file__).with_name("peer.py")
+from .dds_helpers import stop_process
+
+PEER = Path(__file__).with_name("dds_peer.py")
 
 
 @pytest.fixture

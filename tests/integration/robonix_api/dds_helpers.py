@@ -1,4 +1,4 @@
-"""Helpers shared by the DDS tests (importable: pytest puts this directory on sys.path)."""
+"""Helpers shared by the DDS tests."""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """Helper process for the cross-process tests: publishes /scan, /map, /tf, /tf_static and /clock.
 
-Run as ``python tests/dds/peer.py``; prints READY once publishing, MAP <checksum> after each latched map,
-and exits cleanly on SIGTERM or when stdin closes. It inherits ROS_DOMAIN_ID/CYCLONEDDS_URI from the test.
+Run as ``python tests/integration/robonix_api/dds_peer.py``; prints READY once publishing, MAP <checksum>
+after each latched map, and exits cleanly on SIGTERM or when stdin closes. It inherits
+ROS_DOMAIN_ID/CYCLONEDDS_URI from the test.
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from dds_helpers import poll, stop_process
+from .dds_helpers import poll, stop_process
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, SimClock, TfBuffer
 from robonix_api.dds.convert import msg_to_grid, scan_to_numpy
@@ -85,7 +85,7 @@ def test_clock(peer: subprocess.Popen, node: DdsNode) -> None:
 
 def test_peer_stops_cleanly_by_pid() -> None:
     """A fresh peer exits on SIGTERM (sent to its PID) within the deadline, leaving nothing behind."""
-    proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("peer.py"))], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("dds_peer.py"))], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                             stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout.readline().strip() == "READY"

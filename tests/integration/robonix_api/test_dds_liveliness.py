@@ -20,7 +20,7 @@ from cyclonedds.core import Policy
 from cyclonedds.qos import Qos
 from cyclonedds.sub import DataReader
 from cyclonedds.util import duration
-from dds_helpers import poll, stop_process
+from .dds_helpers import poll, stop_process
 
 from robonix_api.dds import Odometry, TfBuffer
 from robonix_api.dds.qos import LIVELINESS_ENV, describe, liveliness_lease_s, qos_profile, writer_qos

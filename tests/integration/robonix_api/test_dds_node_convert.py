@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 import pytest
-from dds_helpers import poll
+from .dds_helpers import poll
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, Odometry, Twist, dds_topic_name
 from robonix_api.dds.convert import (

@@ -25,7 +25,7 @@ pytestmark = pytest.mark.integration
 NAV = "robonix/service/navigation/navigate"
 DRIVER = "robonix/lifecycle/driver"
 DRIVER_PATH = "/robonix.contracts.RobonixLifecycleDriver/Driver"
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 # ---------------------------------------------------------------- hand-rolled protobuf wire helpers

@@ -7,4 +7,4 @@ from pathlib import Path
 try:
     import robonix_eval  # noqa: F401
 except ImportError:  # pragma: no cover - depends on how the venv was built
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[3]))

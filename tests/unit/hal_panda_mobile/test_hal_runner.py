@@ -5,11 +5,11 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from support.procs import wait_until
+
 from hal_panda_mobile.config import build_sim, parse_config
 from hal_panda_mobile.loop import LoopRates, SimLoop
 from hal_panda_mobile.outputs import Snapshot
-
-from .conftest import wait_until
 
 
 class FakeOutputs:

@@ -1,33 +1,13 @@
-"""`rbnx demo` without a running system: user mistakes exit 2 with one line and start nothing; goal choice
-and nav-detail parsing behave as the live view and summary rely on."""
+"""`rbnx demo`'s goal choice and nav-detail parsing behave as the live view and summary rely on (its usage
+errors, which run the CLI, are in tests/integration/rbnx/test_demo_usage_errors.py)."""
 
 from __future__ import annotations
-
-import subprocess
-from pathlib import Path
 
 import pytest
 
 from rbnx.demo_goals import choose_goals, parse_detail, path_length
 
-from .conftest import e2e_env, rbnx_cmd
-
 KITCHEN = {"island_east": [5.8, 3.0], "pantry": [8.3, 6.8], "dining": [2.5, 6.2], "fridge": [8.5, 2.0]}
-
-
-@pytest.mark.parametrize(("args", "message"), [
-    (["--scene", "moon_base"], "available: apartment"),
-    (["--deploy", "missing.yaml"], "missing.yaml not found"),
-    (["--goals", "0"], "--goals"),
-    (["--rtf", "-1"], "--rtf"),
-])
-def test_demo_usage_errors_exit_2_and_start_nothing(tmp_path: Path, args: list[str], message: str) -> None:
-    r = subprocess.run(rbnx_cmd() + ["demo", *args, "--out", str(tmp_path / "out")], env=e2e_env(tmp_path),
-                       cwd=tmp_path, capture_output=True, text=True, timeout=60)
-    assert r.returncode == 2, r.stdout + r.stderr
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], r.stderr
-    assert not (tmp_path / "out").exists()
 
 
 def test_goals_follow_file_order_skip_near_ones_and_cycle() -> None:

@@ -15,7 +15,7 @@ from nav2_wrapper.config import parse_config as parse_nav
 from rbnx.models import load_deploy
 from slam_service.config import parse_config as parse_slam
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 PARSERS = {"hal_panda_mobile": parse_hal, "slam_service": parse_slam, "nav2_wrapper": parse_nav}
 EXAMPLES = [REPO / "examples" / "sim" / "deploy.yaml", REPO / "examples" / "real_robot" / "deploy.yaml"]
 

@@ -9,7 +9,7 @@ import pytest
 from rbnx.models import ManifestProblems, load_deploy
 from rbnx.supervise import RestartPolicy, RestartTracker, exit_text
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.mark.parametrize(("mode", "rc", "want"), [

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 pytestmark = [pytest.mark.integration, pytest.mark.container, pytest.mark.timeout(1500)]
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[4]
 ENGINE = os.environ.get("ROBONIX_CONTAINER_ENGINE", "podman")
 
 
@@ -83,7 +83,7 @@ def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> No
     DDS config and domain forwarded) beside the host's atlas, HAL and SLAM; a goal succeeds; shutdown
     removes the container (scripts/stop.sh)."""
     sys.path.insert(0, str(REPO / "tests"))
-    from e2e.conftest import e2e_env, navigate, rbnx_cmd, wait_until
+    from support.e2e import e2e_env, navigate, rbnx_cmd, wait_until
 
     from robonix_nav_data import resources
 

@@ -19,7 +19,7 @@ import pytest
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState
 
-from .conftest import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
+from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import grpc
 import pytest
-from e2e.conftest import SIM_DEPLOY, _grpc_endpoint, alive, e2e_env, rbnx_cmd, recorded_pids
+from support.e2e import SIM_DEPLOY, alive, e2e_env, grpc_endpoint, rbnx_cmd, recorded_pids
 from support.procs import wait_until
 
 from robonix_api import auth
@@ -29,8 +29,8 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float, accept_within_s: 
     an upstream "left the atlas" is sent again for ``accept_within_s``: navigation re-checks its
     upstreams every 2 s, so right after a restart it may not have seen the new provider yet."""
     with AtlasClient(atlas) as client:
-        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
-        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
+        nav_ep = grpc_endpoint(client, "robonix/service/navigation/navigate")
+        status_ep = grpc_endpoint(client, "robonix/service/navigation/navigate/status")
     req = navigation_pb2.Navigate_Request()
     req.goal.header.frame_id = "map"
     req.goal.pose.position.x, req.goal.pose.position.y = x, y

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
-from e2e.conftest import wait_until
+from support.procs import wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState

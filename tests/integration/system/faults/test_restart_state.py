@@ -9,7 +9,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from e2e.conftest import e2e_env, wait_until
+from support.e2e import e2e_env, wait_until
 
 from rbnx.atlas_rpc import CMD, Atlas, Driver, driver_capability
 from robonix_api.types import LifecycleState
@@ -18,7 +18,7 @@ from .faultutil import booted
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(240)]
 
-MINIMAL = Path(__file__).resolve().parents[2] / "examples" / "minimal"
+MINIMAL = Path(__file__).resolve().parents[4] / "examples" / "minimal"
 
 
 def _deploy(tmp: Path) -> Path:

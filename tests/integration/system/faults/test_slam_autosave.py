@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from e2e.conftest import _grpc_endpoint, wait_until
+from support.e2e import grpc_endpoint, wait_until
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
@@ -53,7 +53,7 @@ def nodes_in(session_file: Path) -> int:
 
 def save_map(atlas: str, map_id: str, map_dir: Path) -> GridMap:
     with AtlasClient(atlas) as client:
-        ep = _grpc_endpoint(client, "robonix/service/map/save_map")
+        ep = grpc_endpoint(client, "robonix/service/map/save_map")
     with auth.channel(ep) as ch:
         r = stubs.RobonixServiceMapSaveMapStub(ch).SaveMap(map_pb2.SaveMap_Request(map_id=map_id), timeout=60)
     assert r.ok, r.detail

@@ -32,7 +32,7 @@ from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[4]
 PROVIDER = REPO / "examples" / "minimal" / "odom_primitive"
 CYCLES = int(os.environ.get("RBNX_TEST_CYCLES", "100"))
 ABORT_MARKS = ("epoll_wait", "Bad file descriptor", "Fatal Python error", "Segmentation fault")

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from e2e.conftest import alive, rbnx_cmd, wait_until
+from support.e2e import alive, rbnx_cmd, wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState

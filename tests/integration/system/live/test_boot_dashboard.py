@@ -17,7 +17,7 @@ from support.procs import wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 
-MINIMAL = Path(__file__).resolve().parents[2] / "examples" / "minimal" / "deploy.yaml"
+MINIMAL = Path(__file__).resolve().parents[4] / "examples" / "minimal" / "deploy.yaml"
 
 
 def test_boot_dashboard_shows_the_boots_providers(tmp_path: Path) -> None:

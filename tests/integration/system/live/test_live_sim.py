@@ -30,7 +30,7 @@ from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, Odometry, TFMessa
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(600)]
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[4]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
 ARTIFACTS = Path(os.environ.get("RBNX_TEST_ARTIFACTS", REPO / "tests" / "artifacts"))
 GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the start pose

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from support.procs import wait_until
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[4]
 SCRIPTS = REPO / "scripts"
 
 

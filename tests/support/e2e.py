@@ -1,26 +1,23 @@
-"""Helpers for the end-to-end tests: the real `rbnx` CLI as a subprocess, PIDs checked through /proc."""
+"""Helpers for the whole-deployment tests (tests/integration/system, the container test): an isolated
+environment for the real `rbnx` CLI, PIDs checked through /proc, a goal driven over gRPC like any consumer."""
 
 from __future__ import annotations
 
 import json
 import os
-import sys
 from pathlib import Path
-
-from support.procs import wait_until
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.proto_gen import navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 
+from .boot import rbnx_cmd
+from .procs import wait_until
+
 REPO = Path(__file__).resolve().parents[2]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
-
-
-def rbnx_cmd() -> list[str]:
-    exe = Path(sys.executable).parent / "rbnx"
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "rbnx.cli"]
+__all__ = ["SIM_DEPLOY", "alive", "e2e_env", "grpc_endpoint", "navigate", "rbnx_cmd", "recorded_pids", "wait_until"]
 
 
 def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
@@ -33,9 +30,6 @@ def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
         env.pop(name, None)
     env.update(extra)
     return env
-
-
-
 
 
 def _stat(pid: int) -> list[str] | None:
@@ -66,7 +60,7 @@ def recorded_pids(state_file: Path) -> list[tuple[str, int, int | None]]:
     return out
 
 
-def _grpc_endpoint(client: AtlasClient, contract: str) -> str:
+def grpc_endpoint(client: AtlasClient, contract: str) -> str:
     cap = client.find_unique_capability(contract_id=contract, transport="grpc")
     with client.connect_capability(consumer_id="e2e-test", provider_id=cap.provider_id, contract_id=contract,
                                    transport="grpc") as ch:
@@ -90,9 +84,9 @@ def navigate(atlas: str, x: float, y: float, timeout_s: float, token: str = "") 
 
 def _navigate(atlas: str, x: float, y: float, timeout_s: float) -> tuple[str, str, tuple[float, float]]:
     with AtlasClient(atlas) as client:
-        nav_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate")
-        status_ep = _grpc_endpoint(client, "robonix/service/navigation/navigate/status")
-        gt_ep = _grpc_endpoint(client, "robonix/primitive/sim/ground_truth")
+        nav_ep = grpc_endpoint(client, "robonix/service/navigation/navigate")
+        status_ep = grpc_endpoint(client, "robonix/service/navigation/navigate/status")
+        gt_ep = grpc_endpoint(client, "robonix/primitive/sim/ground_truth")
     req = navigation_pb2.Navigate_Request()
     req.goal.header.frame_id = "map"
     req.goal.pose.position.x, req.goal.pose.position.y = x, y
