@@ -9,6 +9,7 @@ import time
 
 import grpc
 import pytest
+from support.wait import wait_until
 
 from atlas.server import AtlasServer
 from robonix_api.atlas_client import AtlasClient
@@ -18,17 +19,6 @@ from robonix_api.types import Kind, LifecycleState, McpParams, Ros2Params, Trans
 ODOM = "robonix/primitive/chassis/odom"
 SCAN = "robonix/primitive/lidar/lidar"
 DRIVER = "robonix/lifecycle/driver"
-
-
-def wait_for(pred, timeout: float = 15.0, what: str = "condition"):
-    """Poll with a generous deadline: CI machines are shared and slow."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        value = pred()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 def rpc_error(fn, *args, **kwargs) -> grpc.RpcError:
@@ -235,10 +225,10 @@ def test_heartbeat_handle_calls_on_not_found(client: AtlasClient, uid: str) -> N
 
     handle = client.start_heartbeat(pid, period_s=0.05, on_not_found=on_not_found)
     try:
-        wait_for(lambda: handle.beats >= 2, what="two heartbeats")
+        wait_until(lambda: handle.beats >= 2, 15.0, "two heartbeats")
         client.unregister(pid)  # looks like an atlas restart to the provider
         assert recovered.wait(15.0)
-        wait_for(lambda: client.query(id=pid), what="re-registration")
+        wait_until(lambda: client.query(id=pid), 15.0, "re-registration")
     finally:
         handle.stop()
     assert not handle.running
@@ -296,11 +286,11 @@ def test_eviction_terminates_drops_channels_and_allows_reregister() -> None:
         rid = client.query(id="lapsing")[0].registration_id
         registry.heartbeat_timeout_ms = 300
 
-        p = wait_for(
+        p = wait_until(
             lambda: next(
                 (p for p in client.query(id="lapsing") if p.state == LifecycleState.TERMINATED), None
             ),
-            what="TERMINATED by eviction",
+            15.0, "TERMINATED by eviction",
         )
         assert p.state_detail == "heartbeat lapsed > 300ms"
         assert client.inspect()["channels"] == []

@@ -10,6 +10,7 @@ import sys
 import time
 
 import pytest
+from support.wait import wait_until
 
 from nav2_wrapper.config import Frames
 from nav2_wrapper.inputs import Inputs
@@ -59,15 +60,6 @@ def _start(role: str) -> subprocess.Popen:
     return p
 
 
-def _poll(pred, timeout: float = 15.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if pred():
-            return True
-        time.sleep(0.02)
-    return bool(pred())
-
-
 def test_inputs_lost_names_the_stopped_map_provider_and_degrades_on_scan() -> None:
     procs = {r: _start(r) for r in ("base", "slam_tf", "lidar")}
     node = DdsNode(name="inputs-test")
@@ -85,21 +77,22 @@ def test_inputs_lost_names_the_stopped_map_provider_and_degrades_on_scan() -> No
         return inputs.lost(now, state, data_timeout_s=1.0, map_tf_timeout_s=10.0)
 
     try:
-        assert _poll(lambda: not inputs.missing() and lost() == ({}, {})), (inputs.missing(), lost())
+        wait_until(lambda: not inputs.missing() and lost() == ({}, {}), 15.0,
+                   lambda: f"every input: {inputs.missing()} {lost()}")
         os.kill(procs["slam_tf"].pid, signal.SIGSTOP)
-        assert _poll(lambda: "mapping" in lost()[0]), lost()
+        wait_until(lambda: "mapping" in lost()[0], 15.0, lambda: f"mapping lost: {lost()}")
         req, opt = lost()
         assert req == {"mapping": "TF map→odom stopped (DDS liveliness lost)"}
         assert opt == {}
         os.kill(procs["slam_tf"].pid, signal.SIGCONT)
-        assert _poll(lambda: lost() == ({}, {})), lost()
+        wait_until(lambda: lost() == ({}, {}), 15.0, lambda: f"nothing lost: {lost()}")
 
         procs["lidar"].kill()
-        assert _poll(lambda: lost()[1] != {}), lost()
+        wait_until(lambda: lost()[1] != {}, 15.0, lambda: f"an optional input lost: {lost()}")
         assert lost() == ({}, {"lidar_box": "/lv_scan stopped (DDS liveliness lost)"})
 
         procs["base"].kill()
-        assert _poll(lambda: "panda_mobile" in lost()[0]), lost()
+        wait_until(lambda: "panda_mobile" in lost()[0], 15.0, lambda: f"panda_mobile lost: {lost()}")
         assert lost()[0]["panda_mobile"] == "/lv_odom stopped (DDS liveliness lost)"
         inputs.set_terminated("map", "the atlas reports mapping TERMINATED")
         assert lost()[0]["mapping"] == "the atlas reports mapping TERMINATED"

@@ -6,10 +6,9 @@ import os
 import shutil
 import subprocess
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
-from support.procs import alive, wait_until  # noqa: F401  (alive re-exported)
+from support.procs import alive  # noqa: F401  (re-exported for the rbnx tests)
 
 REPO = Path(__file__).resolve().parents[3]
 MINIMAL = REPO / "examples" / "minimal"
@@ -38,14 +37,6 @@ def copy_minimal(tmp: Path) -> Path:
 
 def run(args: list[str], env: dict[str, str], cwd: Path, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
     return subprocess.run(rbnx_cmd() + args, env=env, cwd=cwd, capture_output=True, text=True, timeout=timeout)
-
-
-def wait_for(pred: Callable[[], bool], timeout: float, what: str, interval: float = 0.1) -> None:
-    """Poll with a generous deadline: the CI machine is shared and slow."""
-    wait_until(pred, timeout, what, interval)
-
-
-
 
 
 def group_alive(pgid: int) -> list[int]:

@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from support.procs import wait_until
 
 # The child records the signal it got into a file and exits; the parent starts it and then waits forever.

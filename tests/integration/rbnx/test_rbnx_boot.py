@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from support.wait import wait_until
 
-from .rbnx_testutil import alive, copy_minimal, group_alive, make_env, rbnx_cmd, run, wait_for
+from .rbnx_testutil import alive, copy_minimal, group_alive, make_env, rbnx_cmd, run
 
 pytestmark = pytest.mark.integration
 SUMMARY = "boot: 2/2 entries ready"
@@ -42,7 +43,7 @@ class Boot:
                 raise AssertionError(f"rbnx boot exited {self.proc.returncode}:\n{self.text()}")
             return needle in self.text()
 
-        wait_for(seen, timeout, f"{needle!r} in boot output")
+        wait_until(seen, timeout, f"{needle!r} in boot output")
 
     def state(self) -> dict[str, Any]:
         files = list((self.tmp / "state").glob("boot-*.json"))
@@ -110,7 +111,7 @@ def test_boot_defers_retries_caps_and_sigint_leaves_nothing(tmp_path: Path, mini
         assert all(alive(p) for p in pids)
         boot.proc.send_signal(signal.SIGINT)
         assert boot.proc.wait(180) == 0, boot.text()
-        wait_for(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
         assert "CMD_SHUTDOWN ok" in boot.text()
         assert not list((tmp_path / "state").glob("boot-*.json"))
     finally:
@@ -126,7 +127,7 @@ def test_rbnx_shutdown_stops_a_running_boot(tmp_path: Path, minimal: tuple[Path,
         res = run(["shutdown", "-f", str(deploy)], env, tmp_path, timeout=240)
         assert res.returncode == 0, res.stderr
         assert boot.proc.wait(60) == 0
-        wait_for(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
     finally:
         boot.kill()
 
@@ -142,7 +143,7 @@ def test_sigkill_of_the_boot_leaves_nothing_behind(tmp_path: Path, minimal: tupl
         assert all(alive(p) for p in pids[1:])
         boot.proc.send_signal(signal.SIGKILL)
         boot.proc.wait(30)
-        wait_for(lambda: all_gone(pids, pgids), 60, "every recorded process to be gone after SIGKILL of rbnx")
+        wait_until(lambda: all_gone(pids, pgids), 60, "every recorded process to be gone after SIGKILL of rbnx")
     finally:
         boot.kill()
 
@@ -168,7 +169,7 @@ def test_exit_after_boot_then_shutdown_from_state_file(tmp_path: Path, minimal: 
     finally:
         down = run(["shutdown", "-f", str(deploy), "--term-timeout", "10"], env, tmp_path, timeout=240)
         assert down.returncode == 0, down.stderr
-        wait_for(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
 
 
 def test_failures_are_reported_and_boot_carries_on(tmp_path: Path) -> None:
@@ -195,7 +196,7 @@ def test_failures_are_reported_and_boot_carries_on(tmp_path: Path) -> None:
         pids, pgids = recorded(boot.state())
         boot.proc.send_signal(signal.SIGTERM)
         assert boot.proc.wait(180) == 1
-        wait_for(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
     finally:
         boot.kill()
 
@@ -264,7 +265,7 @@ def test_sigint_while_deferred_stops_everything(tmp_path: Path) -> None:
         boot.proc.send_signal(signal.SIGINT)
         assert boot.proc.wait(180) == 130
         assert "interrupted" in boot.text()
-        wait_for(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
     finally:
         boot.kill()
 
@@ -283,7 +284,7 @@ def test_start_one_package_against_running_atlas(tmp_path: Path, minimal: tuple[
                                                    "--name", "odom_extra", "--kind", "primitive", "-s", "topic=/odom2",
                                                    "--log-dir", str(tmp_path / "startlogs"), "--no-progress"],
                                      env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)
-        wait_for(lambda: "odom_extra is active" in out.read_text(), 120, "rbnx start to report active")
+        wait_until(lambda: "odom_extra is active" in out.read_text(), 120, "rbnx start to report active")
         caps = json.loads(run(["--atlas", atlas, "caps", "--json", "-v", "--id", "odom_extra"], env, tmp_path).stdout)
         odom = [c for c in caps[0]["capabilities"] if c["contract_id"] == "robonix/primitive/chassis/odom"]
         assert odom[0]["endpoint"] == "/odom2"

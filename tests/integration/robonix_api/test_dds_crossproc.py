@@ -10,10 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from .dds_helpers import poll, stop_process
+from support.wait import wait_until
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, SimClock, TfBuffer
 from robonix_api.dds.convert import msg_to_grid, scan_to_numpy
+
+from .dds_helpers import stop_process
 
 pytestmark = pytest.mark.integration
 
@@ -27,7 +29,7 @@ def test_scan_best_effort(peer: subprocess.Popen, node: DdsNode) -> None:
             got.append(m)
 
     node.create_subscription("/scan", LaserScan, cb, "best_effort")
-    assert poll(lambda: len(got) >= 3), "no /scan from the peer process"
+    wait_until(lambda: len(got) >= 3, 20.0, "three /scan messages from the peer process")
     scan = got[-1]
     angles, ranges = scan_to_numpy(scan)
     assert scan.header.frame_id == "laser"
@@ -56,7 +58,8 @@ def test_volatile_subscriber_gets_no_old_map(peer: subprocess.Popen, node: DdsNo
 def test_tf_and_tf_static(peer: subprocess.Popen, node: DdsNode) -> None:
     buf = TfBuffer(node)
     try:
-        assert poll(lambda: buf.can_transform("map", "laser")), f"frames so far: {buf.frames()}"
+        wait_until(lambda: buf.can_transform("map", "laser"), 20.0,
+                   lambda: f"map->laser; frames so far: {buf.frames()}")
         tf = buf.lookup_transform("map", "laser")
         x, y, yaw = tf.to_pose2d()
         k = round((tf.stamp - 1000.0) / 0.02)

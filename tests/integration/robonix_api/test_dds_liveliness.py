@@ -20,10 +20,12 @@ from cyclonedds.core import Policy
 from cyclonedds.qos import Qos
 from cyclonedds.sub import DataReader
 from cyclonedds.util import duration
-from .dds_helpers import poll, stop_process
+from support.wait import wait_until
 
 from robonix_api.dds import Odometry, TfBuffer
 from robonix_api.dds.qos import LIVELINESS_ENV, describe, liveliness_lease_s, qos_profile, writer_qos
+
+from .dds_helpers import stop_process
 
 WRITER = r"""
 import sys, time
@@ -64,22 +66,24 @@ def test_liveliness_stop_cont_kill_reported_per_writer(node, writer_proc) -> Non
     tf = TfBuffer(node)
     try:
         assert got.wait(20.0), "no odometry from the writer process"
-        assert poll(lambda: len(sub.alive_writers()) == 1 and tf.can_transform("map", "odom"))
+        wait_until(lambda: len(sub.alive_writers()) == 1 and tf.can_transform("map", "odom"), 20.0,
+                   "one alive writer and map->odom")
         assert tf.lost_links() == []
         assert not tf.link_lost("odom")
 
         os.kill(writer_proc.pid, signal.SIGSTOP)
-        assert poll(lambda: not sub.alive_writers() and tf.link_lost("odom"), timeout=10.0)
+        wait_until(lambda: not sub.alive_writers() and tf.link_lost("odom"), 10.0, "the writer and map->odom lost")
         assert events[-1][1] is False
         assert tf.lost_links() == [("map", "odom")]
 
         os.kill(writer_proc.pid, signal.SIGCONT)
-        assert poll(lambda: len(sub.alive_writers()) == 1 and not tf.link_lost("odom"), timeout=10.0)
+        wait_until(lambda: len(sub.alive_writers()) == 1 and not tf.link_lost("odom"), 10.0,
+                   "the writer and map->odom back")
         assert events[-1][1] is True
 
         writer_proc.kill()
         writer_proc.wait(10)
-        assert poll(lambda: not sub.alive_writers() and tf.link_lost("odom"), timeout=10.0)
+        wait_until(lambda: not sub.alive_writers() and tf.link_lost("odom"), 10.0, "the writer and map->odom lost")
     finally:
         tf.close()
         sub.close()
@@ -93,13 +97,15 @@ def test_fresh_data_repairs_a_lost_event_delivered_out_of_order(node, writer_pro
     tf = TfBuffer(node)
     try:
         assert got.wait(20.0), "no odometry from the writer process"
-        assert poll(lambda: len(sub.alive_writers()) == 1 and tf.can_transform("map", "odom"))
+        wait_until(lambda: len(sub.alive_writers()) == 1 and tf.can_transform("map", "odom"), 20.0,
+                   "one alive writer and map->odom")
         (handle,) = sub.alive_writers()
         sub._liveliness_event(handle, False)  # the late 'lost' call, as the listener would make it
         for tf_sub in tf._subs:
             for h in tf_sub.alive_writers():
                 tf_sub._liveliness_event(h, False)
-        assert poll(lambda: sub.alive_writers() == {handle} and not tf.link_lost("odom"), timeout=10.0)
+        wait_until(lambda: sub.alive_writers() == {handle} and not tf.link_lost("odom"), 10.0,
+                   "the same writer alive again and map->odom back")
     finally:
         tf.close()
         sub.close()

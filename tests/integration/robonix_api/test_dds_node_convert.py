@@ -5,11 +5,10 @@ from __future__ import annotations
 import logging
 import math
 import threading
-import time
 
 import numpy as np
 import pytest
-from .dds_helpers import poll
+from support.wait import wait_until
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, Odometry, Twist, dds_topic_name
 from robonix_api.dds.convert import (
@@ -48,9 +47,9 @@ def test_callback_exception_is_logged_not_fatal(node: DdsNode, caplog: pytest.Lo
     assert pub.wait_for_subscribers(1, 20)
     with caplog.at_level(logging.ERROR, logger="robonix_api.dds.node"):
         pub.publish(twist(1.0))
-        assert poll(lambda: 1.0 in seen)
+        wait_until(lambda: 1.0 in seen, 20.0, "the first message")
         pub.publish(twist(2.0))
-        assert poll(lambda: 2.0 in seen)
+        wait_until(lambda: 2.0 in seen, 20.0, "the second message after the failing callback")
     assert "boom" in caplog.text
 
 
@@ -61,7 +60,7 @@ def test_callbacks_on_background_thread_and_close_stops_them(node: DdsNode) -> N
     pub = node.create_publisher("/odom", Odometry, "reliable")
     assert pub.wait_for_subscribers(1, 20)
     pub.publish(odometry(1, 2, 0.5))
-    assert poll(lambda: threads)
+    wait_until(lambda: threads, 20.0, "a callback")
     assert threads[0] != threading.current_thread().name
     sub.close()
     sub.close()  # idempotent
@@ -142,9 +141,7 @@ def test_static_transforms_from_two_publishers_both_survive(node: DdsNode) -> No
         StaticTfBroadcaster(node).send("base_link", "laser", 0.1, 0.0, 0.0, 0.0)
         StaticTfBroadcaster(other).send("odom", "base_link", 1.0, 2.0, 0.5, 0.0)
         late = TfBuffer(node)
-        deadline = time.monotonic() + 30
-        while not (late.can_transform("odom", "laser") or time.monotonic() > deadline):
-            time.sleep(0.05)
+        wait_until(lambda: late.can_transform("odom", "laser"), 30.0, "odom->laser from two static publishers")
         x, y, yaw = late.lookup_pose2d("odom", "laser")
         assert abs(yaw - 0.5) < 1e-6
         assert abs(x - (1.0 + 0.1 * math.cos(0.5))) < 1e-6

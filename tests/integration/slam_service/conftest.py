@@ -8,12 +8,11 @@ tests/support.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from support.fixtures import atlas, procs_fixture
 from support.procs import ACTIVATE, DEACTIVATE, HAL, INIT, REPO, SLAM, Proc
-from support.procs import wait_until as _wait_until
+from support.wait import wait_until
 
 __all__ = ["ACTIVATE", "DEACTIVATE", "HAL", "HAL_CONFIG", "INIT", "REPO", "SLAM", "Proc", "atlas", "wait_until"]
 
@@ -29,11 +28,6 @@ SCENE: dict[str, Any] = {
 }
 HAL_CONFIG: dict[str, Any] = {"scene": SCENE, "real_time_factor": 4.0, "odom_noise": "none",
                               "lidar_noise": {"noise_std": 0.0, "dropout_prob": 0.0}}
-
-
-def wait_until(pred: Callable[[], Any], timeout_s: float, what: str, interval: float = 0.1) -> Any:
-    """``support.procs.wait_until``, polling every 0.1 s unless told otherwise."""
-    return _wait_until(pred, timeout_s, what, interval)
 
 
 class SlamTestProc(Proc):

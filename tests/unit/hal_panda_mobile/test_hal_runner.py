@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from support.procs import wait_until
+from support.wait import wait_until
 
 from hal_panda_mobile.config import build_sim, parse_config
 from hal_panda_mobile.loop import LoopRates, SimLoop

@@ -8,20 +8,11 @@ overlap. Deadlines are generous: the machine is shared and has two cores. The he
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 from support.fixtures import atlas, procs_fixture
 from support.procs import ACTIVATE, DEACTIVATE, HAL, INIT, NAV, SLAM, Proc
-from support.procs import wait_until as _wait_until
+from support.wait import wait_until
 
 __all__ = ["ACTIVATE", "DEACTIVATE", "HAL", "INIT", "NAV", "SLAM", "Proc", "atlas", "wait_until"]
-
-
-def wait_until(pred: Callable[[], Any], timeout_s: float, what: str | Callable[[], str],
-               interval: float = 0.1) -> Any:
-    """``support.procs.wait_until``, polling every 0.1 s unless told otherwise."""
-    return _wait_until(pred, timeout_s, what, interval)
 
 
 class E2eProc(Proc):
