@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import socket
 import threading
-import time
 
 import grpc
 import pytest
@@ -244,9 +243,17 @@ def _free_port() -> int:
 def test_heartbeat_survives_unavailable_atlas() -> None:
     dead = AtlasClient(f"127.0.0.1:{_free_port()}")  # nothing listens there
     dead.timeout = 0.5
+    attempts: list[str] = []
+    real_heartbeat = dead.heartbeat_or_raise
+
+    def counted(pid: str) -> None:  # the real call, counted: proves the loop kept trying
+        attempts.append(pid)
+        real_heartbeat(pid)
+
+    dead.heartbeat_or_raise = counted  # type: ignore[method-assign]
     handle = dead.start_heartbeat("x", period_s=0.02, on_not_found=lambda: None)
     try:
-        time.sleep(0.2)
+        wait_until(lambda: len(attempts) >= 3, 30.0, lambda: f"three heartbeat attempts, got {len(attempts)}")
         assert handle.running
         assert handle.beats == 0
     finally:

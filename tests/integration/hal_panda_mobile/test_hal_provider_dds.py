@@ -234,10 +234,11 @@ def test_deactivate_holds_then_reactivates(seen: Latest, hal: HalProcess, node: 
         pub.publish(twist(0.5, 0.0, 0.0))
         time.sleep(0.05)
     pub.close()
+    # held republishes /odom: two more after the last command prove the HAL ran on, and still did not move
+    n = seen.counts.get("/odom", 0)
+    wait_until(lambda: seen.counts.get("/odom", 0) >= n + 2, 30, "two held /odom republished after the commands")
     b = gt(hal)
     assert b.sim_time == a.sim_time
     assert b.x == a.x
-    n = seen.counts.get("/odom", 0)
-    wait_until(lambda: seen.counts.get("/odom", 0) > n, 30, "held /odom republished")
     assert hal.activate() == (True, "active", "")
     wait_until(lambda: gt(hal).sim_time > b.sim_time + 0.5, 60, "sim time to advance again")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from cyclonedds.core import Policy
+from support.wait import wait_until
 
 from robonix_api.dds import (
     QOS_NAMES,
@@ -73,8 +74,25 @@ def test_wrong_message_type(node: DdsNode) -> None:
 
 
 def test_numeric_inputs_are_accepted(node: DdsNode) -> None:
-    pub = node.create_publisher("/ok_scan", LaserScan, "best_effort")
+    """Python ints and float64 arrays are published (converted, not refused) and arrive as the ROS types."""
+    scans: list[LaserScan] = []
+    maps: list[OccupancyGrid] = []
+    sub = node.create_subscription("/ok_scan", LaserScan, scans.append, "reliable")
+    pub = node.create_publisher("/ok_scan", LaserScan, "reliable")
+    assert pub.wait_for_subscribers(1, 20.0), "no reader matched /ok_scan"
     pub.publish(LaserScan(ranges=[1, 2, 3]))  # ints into float32
     pub.publish(LaserScan(ranges=np.ones(360)))  # float64 array into float32
     gpub = node.create_publisher("/ok_map", OccupancyGrid, "latched")
     gpub.publish(OccupancyGrid(data=[0, 100, -1]))
+    gsub = node.create_subscription("/ok_map", OccupancyGrid, maps.append, "latched")  # late: latched
+    try:
+        wait_until(lambda: len(scans) >= 2, 20.0, lambda: f"two scans on /ok_scan, got {len(scans)}")
+        wait_until(lambda: maps, 20.0, "the latched map on /ok_map")
+    finally:
+        sub.close()
+        gsub.close()
+    assert scans[0].ranges.dtype == np.float32
+    assert scans[0].ranges.tolist() == [1.0, 2.0, 3.0]
+    assert scans[1].ranges.shape == (360,)
+    assert np.all(scans[1].ranges == 1.0)
+    assert maps[0].data.tolist() == [0, 100, -1]

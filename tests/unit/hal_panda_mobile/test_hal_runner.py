@@ -66,9 +66,11 @@ def test_paced_rtf_and_deactivate_holds() -> None:
         r.deactivate()
         assert not r.cmd_vel(0.5, 0.0, 0.0)  # ignored unless active
         wait_until(lambda: r.mode == "held", 60, "hold after braking")
-        t = r.sim.time
-        time.sleep(0.3)
+        t, n = r.sim.time, len(out.snaps)
+        # held republishes the frozen state (20 Hz here): five more of them prove time passed, not sim time
+        wait_until(lambda: len(out.snaps) >= n + 5, 60, "five held republishes")
         assert r.sim.time == t
+        assert {s.t for s in out.snaps[n:]} == {t}
         assert max(abs(v) for v in r.sim.ground_truth()[3:]) < 1e-3
     finally:
         r.stop()

@@ -5,12 +5,11 @@ providers re-register on their next heartbeat, and the goal must still SUCCEED (
 from __future__ import annotations
 
 import signal
-import time
 from pathlib import Path
 
 import pytest
 from support.faults import KITCHEN, Recorder, SimBoot, signal_pid
-from support.procs import wait_until
+from support.procs import alive, wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
@@ -21,8 +20,9 @@ def test_atlas_restart_during_a_goal_goal_succeeds(tmp_path: Path) -> None:
         rec = Recorder(boot, run_id).start()
         try:
             wait_until(rec.moving, 90, "the robot to drive the goal")
-            signal_pid(boot.pids()["atlas"], signal.SIGKILL)
-            time.sleep(0.5)
+            atlas_pid = boot.pids()["atlas"]
+            signal_pid(atlas_pid, signal.SIGKILL)
+            wait_until(lambda: not alive(atlas_pid), 30, "the killed atlas to be gone")
             boot.ensure_atlas(5.0)   # the boot's restart: on-failure, else we start one at the address
             wait_until(boot.all_active, 60, lambda: f"providers re-registered: {boot.states()}", 0.2)
             state, detail = boot.wait_terminal(run_id, 180)
