@@ -1,18 +1,15 @@
-"""Pure units: env expansion, backoff, progress rendering, state file, process helpers."""
+"""Pure units: env expansion, backoff, progress rendering, state file, driver path (the process helpers
+run real processes: tests/integration/rbnx/test_rbnx_process_groups.py)."""
 
 from __future__ import annotations
 
 import io
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from rbnx.backoff import Backoff
 from rbnx.envexpand import UndefinedVariable, apply_env_section, expand_str, expand_tree
-from rbnx.procs import group_members, pid_alive, run_hook, spawn
 from rbnx.progress import ProgressView, Row, plain_line, render_table
 from rbnx.statefile import read_state, state_path, write_state
 
@@ -97,42 +94,6 @@ def test_state_file_roundtrip(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
     write_state(p, {"pid": 1}, copy_to=tmp_path / "copy.json")
     assert read_state(p) == {"pid": 1} == read_state(tmp_path / "copy.json")
     assert read_state(tmp_path / "none.json") is None
-
-
-def test_spawned_group_stops_with_grandchildren(tmp_path: Path) -> None:
-    """A package's background children die with it; the PIDs are checked in /proc."""
-    g = spawn("t", ["bash", "-c", "sleep 60 & sleep 60 & wait"], tmp_path, os.environ, tmp_path / "t.log")
-    members: list[int] = []
-
-    def three() -> bool:
-        members[:] = group_members(g.pgid)
-        return len(members) == 3
-
-    for _ in range(200):
-        if three():
-            break
-        subprocess.run(["sleep", "0.05"])
-    assert len(members) == 3
-    assert g.stop(term_timeout=10) == "terminated"
-    assert not any(pid_alive(p) for p in members)
-
-
-def test_stop_escalates_to_kill(tmp_path: Path) -> None:
-    code = "import signal,time,sys; signal.signal(signal.SIGTERM, signal.SIG_IGN); print('up', flush=True); time.sleep(60)"
-    g = spawn("t", [sys.executable, "-c", code], tmp_path, os.environ, tmp_path / "t.log")
-    for _ in range(400):
-        if "up" in (tmp_path / "t.log").read_text():
-            break
-        subprocess.run(["sleep", "0.05"])
-    assert g.stop(term_timeout=0.5) == "killed"
-    assert not pid_alive(g.pid)
-
-
-def test_hook_timeout_kills_group(tmp_path: Path) -> None:
-    ok, how = run_hook("h", "sleep 30", tmp_path, os.environ, None, timeout=0.5)
-    assert not ok
-    assert how == "timed out after 0.5s"
-    assert run_hook("h", "exit 3", tmp_path, os.environ, None, timeout=30) == (False, "exit code 3")
 
 
 def test_driver_path_follows_the_declared_service() -> None:

@@ -6,7 +6,6 @@ import grpc
 import pytest
 
 from atlas.server import AtlasServer
-from atlas.trust import Trust, endpoint_host, parse_allowed_hosts
 from robonix_api.proto_gen import atlas_pb2
 
 from .conftest import TOKEN, declare_grpc, md, raw_stub, register
@@ -56,13 +55,3 @@ def test_allowed_hosts_extend_the_list() -> None:
             with pytest.raises(grpc.RpcError) as err:
                 declare_grpc(stub, "nav2", NAV + "/cancel", "evil.example.com:443")
             assert "robot2.local" in err.value.details()  # the message lists what is allowed
-
-
-def test_trust_units() -> None:
-    assert endpoint_host("http://127.0.0.1:8/mcp/") == "127.0.0.1"
-    assert endpoint_host("unix:/run/x.sock") == ""
-    assert endpoint_host("[::1]:9") == "::1"
-    assert Trust(allowed_hosts=("*",)).endpoint_problem("evil.example.com:443") is None
-    assert Trust().endpoint_problem("evil.example.com:443")
-    with pytest.raises(ValueError, match="allowed_hosts"):
-        parse_allowed_hosts(["good", "bad host"])

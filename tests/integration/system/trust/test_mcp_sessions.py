@@ -13,26 +13,13 @@ from urllib.parse import urlsplit
 import pytest
 from support.procs import SLAM, Proc, wait_until
 
-from robonix_api.mcp_server import DEFAULT_MAX_SESSIONS, DEFAULT_SESSION_IDLE_S, session_limits
+from robonix_api.mcp_server import DEFAULT_MAX_SESSIONS
 
 pytestmark = pytest.mark.integration
 TOOL = "robonix/service/map/get_mode"
 INIT = json.dumps({"jsonrpc": "2.0", "id": 1, "method": "initialize",
                    "params": {"protocolVersion": "2025-06-18", "capabilities": {},
                               "clientInfo": {"name": "flood", "version": "1"}}}).encode()  # one send(): no Nagle wait
-
-
-def test_session_limits_defaults_and_env(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert session_limits() == {"session_idle_timeout": DEFAULT_SESSION_IDLE_S, "max_sessions": DEFAULT_MAX_SESSIONS}
-    assert (DEFAULT_SESSION_IDLE_S, DEFAULT_MAX_SESSIONS) == (300.0, 100)
-    monkeypatch.setenv("ROBONIX_MCP_SESSION_IDLE_S", "7.5")
-    monkeypatch.setenv("ROBONIX_MCP_MAX_SESSIONS", "3")
-    assert session_limits() == {"session_idle_timeout": 7.5, "max_sessions": 3}
-    for bad in ("0", "-1", "nan", "inf", "lots"):  # a typo never switches a limit off
-        monkeypatch.setenv("ROBONIX_MCP_SESSION_IDLE_S", bad)
-        monkeypatch.setenv("ROBONIX_MCP_MAX_SESSIONS", bad)
-        assert session_limits() == {"session_idle_timeout": DEFAULT_SESSION_IDLE_S,
-                                    "max_sessions": DEFAULT_MAX_SESSIONS}
 
 
 class McpHttp:

@@ -11,13 +11,11 @@ import grpc
 import pytest
 from support.procs import wait_until
 
-from atlas.registry import Registry, RegistryError
 from atlas.server import AtlasServer
 from robonix_api import Ok, Service
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.auth import TOKEN_ENV
 from robonix_api.proto_gen import atlas_pb2
-from robonix_api.types import Kind, LifecycleState
 
 from .conftest import TOKEN, declare_grpc, raw_stub, register
 
@@ -76,21 +74,6 @@ def test_hijack_and_foreign_changes_refused_with_token(token_atlas: AtlasServer,
     assert "robonix/lifecycle/driver" in {c.contract_id for c in after.capabilities}
     assert svc.registration_replaced == 0
     assert NAV not in {c.contract_id for c in after.capabilities}  # the fake declare left nothing
-
-
-def test_registry_ownership_rule() -> None:
-    reg = Registry(heartbeat_timeout_ms=0)
-    reg.register(Kind.SERVICE, "nav2", "robonix/service/navigation")
-    with pytest.raises(RegistryError) as err:
-        reg.register(Kind.SERVICE, "nav2", "robonix/service/navigation", may_replace_live=False)
-    assert err.value.code == "ALREADY_EXISTS"
-    assert err.value.message.startswith("id: ")
-    reg.set_state("nav2", LifecycleState.TERMINATED)
-    _, reg_id = reg.register_ex(Kind.SERVICE, "nav2", "robonix/service/navigation", may_replace_live=False)
-    with pytest.raises(RegistryError) as err:
-        reg.heartbeat("nav2", registration_id="an-old-one")
-    assert err.value.code == "FAILED_PRECONDITION"
-    reg.heartbeat("nav2", registration_id=reg_id)
 
 
 def test_provider_notices_its_registration_was_replaced(open_atlas: AtlasServer, nav2_factory: object,

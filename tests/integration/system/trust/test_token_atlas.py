@@ -86,12 +86,3 @@ def test_atlas_without_token_is_open_as_robonix(open_atlas: AtlasServer) -> None
         stub.SetLifecycleState(atlas_pb2.SetLifecycleStateRequest(id="nav2", state=atlas_pb2.STATE_ACTIVE),
                                timeout=5)
         assert stub.Unregister(atlas_pb2.UnregisterRequest(id="nav2"), timeout=5).was_present
-
-
-def test_atlas_console_script_takes_the_token_from_env_and_auth_none_ignores_it() -> None:
-    from atlas import settings
-
-    assert settings.resolve({}, '{"auth": "none"}').auth == "none"
-    assert settings.resolve({}, None).auth == "token"
-    with pytest.raises(ValueError, match="auth"):
-        settings.resolve({}, '{"auth": "maybe"}')
