@@ -85,7 +85,9 @@ def test_busy_port_exits_2_with_one_line() -> None:
         res = _run_fail(ROBONIX_ATLAS_LISTEN=f"127.0.0.1:{port}")  # env fallback for --listen
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and "listen" in lines[0] and str(port) in lines[0], res.stderr
+    assert len(lines) == 1, res.stderr
+    assert "listen" in lines[0], res.stderr
+    assert str(port) in lines[0], res.stderr
     assert res.stdout == ""
 
 
@@ -128,6 +130,7 @@ def test_config_json_as_robonix_rbnx_passes_it() -> None:
 ])
 def test_bad_config_json_exits_2_naming_the_field(cfg: str, word: str) -> None:
     res = _run_fail("--config-json", cfg)
-    assert res.returncode == 2 and word in res.stderr, res.stderr
+    assert res.returncode == 2, res.stderr
+    assert word in res.stderr, res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     assert "Traceback" not in res.stderr

@@ -72,11 +72,13 @@ def system(procs) -> Iterator[System]:  # type: ignore[no-untyped-def]
     assert hal.driver(ACTIVATE)[0]
     assert mapper.driver(INIT, {"scene": "apartment"})[0], mapper.log()[-3000:]
     ok, state, err = nav.driver(INIT, NAV_CFG)
-    assert ok and state == "inactive", (err, nav.log()[-4000:])
+    assert ok, (err, nav.log()[-4000:])
+    assert state == "inactive", (err, nav.log()[-4000:])
     assert nav.driver(ACTIVATE)[:2] == (True, "active")
     yield System(hal, nav)
     log = nav.log()
-    assert "Traceback" not in log and "loop iteration failed" not in log, log[-4000:]
+    assert "Traceback" not in log, log[-4000:]
+    assert "loop iteration failed" not in log, log[-4000:]
 
 
 def test_navigate_to_reachable_goal(system: System) -> None:
@@ -86,7 +88,8 @@ def test_navigate_to_reachable_goal(system: System) -> None:
     sub = node.create_subscription("/plan", PathMsg, plans.append, "reliable")
     try:
         r = system.navigate(*KITCHEN)
-        assert r.accepted and r.run_id, r.detail
+        assert r.accepted, r.detail
+        assert r.run_id, r.detail
         s = system.wait_state(r.run_id, ("SUCCEEDED", "FAILED", "CANCELED"), 240)
         assert s.state == "SUCCEEDED", (s.detail, system.nav.log()[-3000:])
     finally:
@@ -112,21 +115,24 @@ def test_bad_goals_rejected_with_reason(system: System) -> None:
     ]
     for kwargs, reason in cases:
         r = system.navigate(**kwargs)
-        assert not r.accepted and reason in r.detail, (kwargs, r.detail)
+        assert not r.accepted, (kwargs, r.detail)
+        assert reason in r.detail, (kwargs, r.detail)
         s = system.status(r.run_id)
         assert s.known
         assert s.state == "FAILED"
         assert reason in s.detail
     # a goal in another TF frame connected to map (odom; identity here) is transformed, not rejected
     r = system.navigate(3.0, 4.0, frame="odom")
-    assert r.accepted and "goal (3.00, 4.00" in r.detail, r.detail
+    assert r.accepted, r.detail
+    assert "goal (3.00, 4.00" in r.detail, r.detail
     assert system.cancel(r.run_id).accepted
     t_cancel = system.gt().sim_time
     unknown = system.status("nav-doesnotexist")
     assert (unknown.known, unknown.state) == (False, "FAILED")
     # Under load the base may already be moving when cancel lands: stopped within 0.5 s of sim time.
     g = wait_until(lambda: (x := system.gt()).sim_time >= t_cancel + 0.5 and x, 60, "0.5 s of sim time", 0.02)
-    assert math.hypot(g.vx, g.vy) < 0.03 and abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
+    assert math.hypot(g.vx, g.vy) < 0.03, (g.vx, g.vy, g.wz)
+    assert abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
 
 
 def test_preempt_then_cancel_stops_the_base(system: System) -> None:
@@ -146,7 +152,8 @@ def test_preempt_then_cancel_stops_the_base(system: System) -> None:
     assert c.accepted, c.detail
     assert system.status(second.run_id).state == "CANCELED"
     g = wait_until(lambda: (x := system.gt()).sim_time >= t_cancel + 0.5 and x, 60, "0.5 s of sim time", 0.02)
-    assert math.hypot(g.vx, g.vy) < 0.03 and abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
+    assert math.hypot(g.vx, g.vy) < 0.03, (g.vx, g.vy, g.wz)
+    assert abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
     again = system.cancel(second.run_id)
     assert not again.accepted
     assert "already CANCELED" in again.detail
@@ -185,7 +192,8 @@ def test_speed_contracts(system: System) -> None:
 def test_deactivate_rejects_goals(system: System) -> None:
     assert system.nav.driver(DEACTIVATE)[:2] == (True, "inactive")
     r = system.navigate(*LIVING)
-    assert not r.accepted and r.detail.startswith("inactive"), r.detail
+    assert not r.accepted, r.detail
+    assert r.detail.startswith("inactive"), r.detail
     assert system.nav.driver(ACTIVATE)[:2] == (True, "active")
 
 

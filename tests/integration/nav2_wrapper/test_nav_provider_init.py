@@ -36,7 +36,8 @@ def _goal(x: float = 1.0, y: float = 1.0) -> nav_pb.Navigate_Request:
 def test_contracts_live_before_init(nav: Proc) -> None:
     navigate = nav.stub(NS + "navigate", rpc.RobonixServiceNavigationNavigateStub)
     r = navigate.Navigate(_goal(), timeout=30)
-    assert not r.accepted and r.detail.startswith("not initialized"), r.detail
+    assert not r.accepted, r.detail
+    assert r.detail.startswith("not initialized"), r.detail
     status = nav.stub(NS + "navigate/status", rpc.RobonixServiceNavigationNavigateStatusStub)
     s = status.GetNavigationStatus(nav_pb.GetNavigationStatus_Request(), timeout=30)
     assert (s.known, s.state) == (False, "FAILED")
@@ -59,28 +60,35 @@ def test_invalid_config_names_the_field(nav: Proc) -> None:
                        ({"frobnicate": 1}, "frobnicate"),
                        ({"robot_description": "/nonexistent/robot.yaml"}, "robot_description")):
         ok, state, err = nav.driver(INIT, cfg)
-        assert not ok and state == "error" and field in err, (cfg, err)
+        assert not ok, (cfg, err)
+        assert state == "error", (cfg, err)
+        assert field in err, (cfg, err)
 
 
 def test_init_deferred_until_upstream_appears(nav: Proc, procs) -> None:  # type: ignore[no-untyped-def]
     ok, state, err = nav.driver(INIT, {"action_wait_s": 2})
     assert (ok, state) == (False, "deferred")
-    assert "robonix/service/map/occupancy_grid" in err and "no provider" in err, err
+    assert "robonix/service/map/occupancy_grid" in err, err
+    assert "no provider" in err, err
     navigate = nav.stub(NS + "navigate", rpc.RobonixServiceNavigationNavigateStub)
     r = navigate.Navigate(_goal(), timeout=30)
-    assert not r.accepted and "robonix/service/map/occupancy_grid" in r.detail, r.detail
+    assert not r.accepted, r.detail
+    assert "robonix/service/map/occupancy_grid" in r.detail, r.detail
 
     procs(MAP_PROVIDER, "map_for_init")  # declares the occupancy grid from process start
     ok, state, err = nav.driver(INIT, {"action_wait_s": 2})
-    assert (ok, state) == (False, "deferred") and "robonix/primitive/chassis/odom" in err, err
+    assert (ok, state) == (False, "deferred"), err
+    assert "robonix/primitive/chassis/odom" in err, err
     # a pinned provider that is not there is named
     ok, state, err = nav.driver(INIT, {"action_wait_s": 2, "provider_ids": {"map": "nobody"}})
-    assert state == "deferred" and "'nobody'" in err, err
+    assert state == "deferred", err
+    assert "'nobody'" in err, err
 
     # odom remapped (no atlas lookup) but nothing publishes: Err naming each missing input
     ok, state, err = nav.driver(INIT, {"action_wait_s": 2, "topic_remap": {"odom": "/odom_nowhere"}})
     assert (ok, state) == (False, "error"), err
-    assert "no /odom_nowhere received within 2 s" in err and "no /map received within 2 s" in err, err
+    assert "no /odom_nowhere received within 2 s" in err, err
+    assert "no /map received within 2 s" in err, err
     assert "no TF map→odom" in err, err
     r = navigate.Navigate(_goal(), timeout=30)
     assert not r.accepted
@@ -92,8 +100,10 @@ def test_package_entry_point_serves_the_same_provider(procs) -> None:  # type: i
     p: Proc = procs([sys.executable, "-m", "nav2_wrapper"], "nav_entry")
     status = p.stub(NS + "navigate/status", rpc.RobonixServiceNavigationNavigateStatusStub)
     s = status.GetNavigationStatus(nav_pb.GetNavigationStatus_Request(), timeout=30)
-    assert (s.known, s.state) == (False, "FAILED") and s.detail == "not initialized: waiting for CMD_INIT", s.detail
-    assert p.stop() == 0 and "Traceback" not in p.log(), p.log()[-4000:]
+    assert (s.known, s.state) == (False, "FAILED"), s.detail
+    assert s.detail == "not initialized: waiting for CMD_INIT", s.detail
+    assert p.stop() == 0, p.log()[-4000:]
+    assert "Traceback" not in p.log(), p.log()[-4000:]
 
 
 def test_shutdown(nav: Proc) -> None:

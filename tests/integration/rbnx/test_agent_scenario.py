@@ -318,7 +318,8 @@ def test_telemetry_reaches_a_collector(deployment: Deployment) -> None:
     assert span["parent"] == parent
     assert span["service"] == "nav2"
     a = span["attrs"]
-    assert a["nav.run_id"] == reply.run_id and a["nav.end_state"] == "SUCCEEDED", a
+    assert a["nav.run_id"] == reply.run_id, a
+    assert a["nav.end_state"] == "SUCCEEDED", a
     assert a["nav.goal.x"] == pytest.approx(GOALS[0][0])
     assert a["nav.distance_driven_m"] > 0.5
     assert a["nav.recoveries"] >= 0
@@ -374,7 +375,9 @@ def test_slam_publishes_its_lifecycle(deployment: Deployment) -> None:
         msg = node.wait_for_message(topic, MapLifecycle, 60, "transient_local")
     assert msg is not None, f"nothing latched on {topic}"
     # INIT (paused), activate, deactivate (paused), activate: the agent's decisions, in order
-    assert msg.mode == "mapping" and msg.generation >= 4 and msg.map_id == "", msg
+    assert msg.mode == "mapping", msg
+    assert msg.generation >= 4, msg
+    assert msg.map_id == "", msg
 
 
 def rbnx(deployment: Deployment, *args: str) -> subprocess.CompletedProcess[str]:
@@ -387,7 +390,8 @@ def rbnx(deployment: Deployment, *args: str) -> subprocess.CompletedProcess[str]
 def test_a_person_at_a_terminal(deployment: Deployment) -> None:
     deploy = deployment.state["deploy"]
     tools = rbnx(deployment, "tools")
-    assert tools.returncode == 0 and deployment.url in tools.stdout, tools.stdout + tools.stderr
+    assert tools.returncode == 0, tools.stdout + tools.stderr
+    assert deployment.url in tools.stdout, tools.stdout + tools.stderr
     listed = rbnx(deployment, "lifecycle", "-f", deploy)
     assert listed.returncode == 0, listed.stderr
     assert re.search(r"^mapping\s+service\s+active", listed.stdout, re.M), listed.stdout
@@ -396,14 +400,16 @@ def test_a_person_at_a_terminal(deployment: Deployment) -> None:
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "deactivate")
     assert (r.returncode, r.stdout.strip()) == (0, "mapping: inactive"), r.stderr
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure", "-s", "map_publish_period_s=-1")
-    assert r.returncode == 1 and "map_publish_period_s" in r.stderr, r.stdout + r.stderr  # the provider's reason
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "map_publish_period_s" in r.stderr, r.stdout + r.stderr  # the provider's reason
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure", "-s", "map_publish_period_s=0.7")
     assert (r.returncode, r.stdout.strip()) == (0, "mapping: inactive"), r.stderr
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "activate")
     assert (r.returncode, r.stdout.strip()) == (0, "mapping: active"), r.stderr
 
     r = rbnx(deployment, "lifecycle", "-f", deploy, "nosuch", "activate")
-    assert r.returncode == 1 and "unknown entry 'nosuch'; known: panda_mobile, mapping, nav2" in r.stderr, r.stderr
+    assert r.returncode == 1, r.stderr
+    assert "unknown entry 'nosuch'; known: panda_mobile, mapping, nav2" in r.stderr, r.stderr
     r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "configure")
     assert r.returncode == 2
     assert "-s KEY=VALUE or --patch" in r.stderr

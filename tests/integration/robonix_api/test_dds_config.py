@@ -31,7 +31,8 @@ def test_running_cyclone_selected_only_lo() -> None:
     """Cyclone's own trace of the config in use: only lo selected, no multicast on it."""
     rt = probe_runtime()
     assert rt["selected_interfaces"] == ["lo"], rt
-    assert rt["multicast_interfaces"] == [] and rt["allow_multicast"] == "false", rt
+    assert rt["multicast_interfaces"] == [], rt
+    assert rt["allow_multicast"] == "false", rt
 
 
 def test_node_reports_config(node: DdsNode) -> None:
@@ -41,7 +42,8 @@ def test_node_reports_config(node: DdsNode) -> None:
 
 def test_default_config_when_uri_unset(tmp_path: Path) -> None:
     res, _ = run_child(None)
-    assert res.returncode == 0 and "OK" in res.stdout, res.stderr
+    assert res.returncode == 0, res.stderr
+    assert "OK" in res.stdout, res.stderr
     assert DEFAULT_CONFIG.is_file()
 
 
@@ -58,7 +60,8 @@ def test_bad_uri_fails_fast_with_clear_error(tmp_path: Path, content: str | None
         path.write_text(content)
     res, took = run_child(path.as_uri())
     assert res.returncode != 0
-    assert "DdsConfigError" in res.stderr and expect in res.stderr, res.stderr[-1500:]
+    assert "DdsConfigError" in res.stderr, res.stderr[-1500:]
+    assert expect in res.stderr, res.stderr[-1500:]
     assert took < 30.0  # a clear failure, never a hang (generous for a loaded 2-core box)
 
 
@@ -72,9 +75,13 @@ def test_inline_fragments_without_a_root_as_cyclone_takes_them(monkeypatch: pyte
     """``<General>…</General><Discovery>…</Discovery>`` (no root element) is valid for Cyclone: ours too."""
     monkeypatch.setenv("CYCLONEDDS_URI", LOOPBACK_FRAGMENTS)
     cfg = effective_config()
-    assert cfg["interfaces"] == ["lo"] and cfg["multicast_disabled"] and cfg["loopback_only"], cfg
+    assert cfg["interfaces"] == ["lo"], cfg
+    assert cfg["multicast_disabled"], cfg
+    assert cfg["loopback_only"], cfg
     assert probe_runtime()["selected_interfaces"] == ["lo"]  # Cyclone itself read the fragments
     res, _ = run_child(LOOPBACK_FRAGMENTS)
-    assert res.returncode == 0 and "OK" in res.stdout, res.stderr[-1500:]
+    assert res.returncode == 0, res.stderr[-1500:]
+    assert "OK" in res.stdout, res.stderr[-1500:]
     res, _ = run_child("<General><Interfaces></General>")  # fragments, but not well-formed
-    assert res.returncode != 0 and "not well-formed XML" in res.stderr, res.stderr[-1500:]
+    assert res.returncode != 0, res.stderr[-1500:]
+    assert "not well-formed XML" in res.stderr, res.stderr[-1500:]

@@ -91,7 +91,8 @@ def init_provider(client: AtlasClient, pid: str) -> None:
                                    transport="grpc") as ch, grpc.insecure_channel(ch.endpoint) as channel:
         stub = robonix_contracts_pb2_grpc.RobonixLifecycleDriverStub(channel)
         reply = stub.Driver(lifecycle_pb2.Driver_Request(command=0, config_json="{}"), timeout=30)
-    assert reply.ok and reply.state == "inactive", reply
+    assert reply.ok, reply
+    assert reply.state == "inactive", reply
 
 
 def test_sigkill_is_evicted_then_restart_reregisters(atlas: AtlasServer, spawn) -> None:  # type: ignore[no-untyped-def]

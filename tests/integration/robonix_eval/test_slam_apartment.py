@@ -47,7 +47,8 @@ def _drive_ok(on: SlamLoopResult) -> None:
     d = on.drive
     assert d.completed, (d.reached, d.waypoints)
     assert d.collisions == 0
-    assert d.max_track_error < 0.05 and d.path_length > 50.0, d
+    assert d.max_track_error < 0.05, d
+    assert d.path_length > 50.0, d
 
 
 def test_scripted_drive_and_odometry_drift(realistic: Pair, hard: dict[int, Pair]) -> None:
@@ -64,8 +65,10 @@ def test_scripted_drive_and_odometry_drift(realistic: Pair, hard: dict[int, Pair
 def test_realistic_loop_closure_is_never_harmful(realistic: Pair) -> None:
     on, off = realistic
     _show("realistic", on, off)
-    assert on.ate_rmse <= 0.05 and on.iou >= 0.85, (on.ate_rmse, on.iou)
-    assert off.ate_rmse <= 0.05 and off.iou >= 0.85, (off.ate_rmse, off.iou)
+    assert on.ate_rmse <= 0.05, (on.ate_rmse, on.iou)
+    assert on.iou >= 0.85, (on.ate_rmse, on.iou)
+    assert off.ate_rmse <= 0.05, (off.ate_rmse, off.iou)
+    assert off.iou >= 0.85, (off.ate_rmse, off.iou)
     assert on.ate_rmse <= off.ate_rmse + 0.01  # verified closures: no worse than scan matching alone
 
 
@@ -83,4 +86,5 @@ def test_hard_acceptance_ate_and_iou(hard: dict[int, Pair], seed: int) -> None:
 def test_hard_loop_closure_measurably_better(hard: dict[int, Pair], seed: int) -> None:
     """The issue's other half: the same drive with loop closure off is measurably worse."""
     on, off = hard[seed]
-    assert off.ate_rmse >= 1.2 * on.ate_rmse and off.ate_rmse - on.ate_rmse >= 0.005, (on.ate_rmse, off.ate_rmse)
+    assert off.ate_rmse >= 1.2 * on.ate_rmse, (on.ate_rmse, off.ate_rmse)
+    assert off.ate_rmse - on.ate_rmse >= 0.005, (on.ate_rmse, off.ate_rmse)

@@ -102,10 +102,12 @@ def env(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory) ->
                        ({"frames": {"map": ""}}, "frames.map"), ({"map_publish_period_s": 0}, "map_publish_period_s"),
                        ({"mode": "slam"}, "mode"), ({"bogus": 1}, "bogus")):
         ok, state, err = slam.driver(INIT, bad)
-        assert (ok, state) == (False, "error") and field in err, (bad, err)
+        assert (ok, state) == (False, "error"), (bad, err)
+        assert field in err, (bad, err)
     config = {"map_dir": str(map_dir), "map_publish_period_s": 0.5}
     ok, state, err = slam.driver(INIT, config)
-    assert (ok, state) == (False, "deferred") and "waiting for robonix/primitive/lidar/lidar" in err, err
+    assert (ok, state) == (False, "deferred"), err
+    assert "waiting for robonix/primitive/lidar/lidar" in err, err
     hal = procs(HAL, "sim_base")
     assert hal.driver(INIT, HAL_CONFIG) == (True, "inactive", "")
     assert slam.driver(INIT, config) == (True, "inactive", ""), slam.log()
@@ -159,7 +161,8 @@ def test_map_grows_pauses_and_resumes(env: Env) -> None:
 
 def test_save_list_and_localize_on_saved_map(env: Env) -> None:
     save = env.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="room1", note="test room"), timeout=60)
-    assert save.ok and save.map_id == "room1", save.detail
+    assert save.ok, save.detail
+    assert save.map_id == "room1", save.detail
     folder = env.map_dir / "room1"
     assert {p.name for p in folder.iterdir()} == {"map.yaml", "map.pgm", "session.npz", "meta.json", ".robonix-map"}
     grid = load_map_yaml(folder / "map.yaml")
@@ -184,7 +187,8 @@ def test_save_list_and_localize_on_saved_map(env: Env) -> None:
     assert p.frame_id == "map"
     err = float(np.hypot(p.x - g.x, p.y - g.y))
     dth = abs((p.theta - g.theta + np.pi) % (2 * np.pi) - np.pi)
-    assert err < 0.05 and dth < 0.05, (err, dth, p, g)
+    assert err < 0.05, (err, dth, p, g)
+    assert dth < 0.05, (err, dth, p, g)
 
 
 def test_bad_requests_fail_clearly(env: Env) -> None:
@@ -200,13 +204,16 @@ def test_bad_requests_fail_clearly(env: Env) -> None:
     broken.mkdir()
     (broken / "map.yaml").write_text("image: [unclosed\nresolution: 0.05\n")
     r = env.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="broken", mode="localization"), timeout=30)
-    assert not r.ok and str(broken / "map.yaml") in r.detail, r.detail
+    assert not r.ok, r.detail
+    assert str(broken / "map.yaml") in r.detail, r.detail
     r = env.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="nope"), timeout=30)
     assert not r.ok
     assert "no map 'nope'" in r.detail
     assert env.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).mode == "localization"  # kept
     d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
-    assert not d.ok and ".robonix-map marker" in d.detail and broken.exists(), d.detail  # not written by the store
+    assert not d.ok, d.detail
+    assert ".robonix-map marker" in d.detail, d.detail
+    assert broken.exists(), d.detail  # not written by the store
     (broken / ".robonix-map").write_text("")
     d = env.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="broken"), timeout=30)
     assert d.ok
@@ -293,7 +300,9 @@ def test_unwritable_map_dir_and_reset(env: Env, tmp_path: Path) -> None:
     env.drive(0.2, 0.0, 0.0, 2.0)  # 0.4 m: the first scan plus at least one gated-in scan (0.2 m travel)
     wait_until(lambda: env.stats()["engine"]["scans_integrated"] >= 2, 60, "mapping after re-INIT")
     r = env.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="room2"), timeout=30)
-    assert not r.ok and str(blocker) in r.detail and "directory" in r.detail.lower(), r.detail
+    assert not r.ok, r.detail
+    assert str(blocker) in r.detail, r.detail
+    assert "directory" in r.detail.lower(), r.detail
     r2 = env.rpc("reset_map").ResetMap(map_pb2.ResetMap_Request(), timeout=30)
     assert r2.ok
     # Not "== 0": scans keep arriving, and the first one after a reset always starts the new map. The

@@ -440,4 +440,5 @@ def test_mint_and_rewrite_always_valid() -> None:
     for proposed in ("/odom", "/odom_", "scan", "/a/b_c"):
         for _ in range(50):
             out = rewrite_ros2_endpoint(proposed)
-            assert is_valid_ros2_name(out) and out != proposed, out
+            assert is_valid_ros2_name(out), out
+            assert out != proposed, out

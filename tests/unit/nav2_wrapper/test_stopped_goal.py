@@ -34,4 +34,5 @@ def test_profiles_use_the_stopped_checker() -> None:
     for profile in ("sim", "slam", "default"):
         loaded = load_params(profile, map_topic="/map", odom_topic="/odom", scan_topic="/scan")
         gc = loaded.config.goal_checker
-        assert gc.trans_stopped_velocity == 0.25 and gc.rot_stopped_velocity == 0.25, profile
+        assert gc.trans_stopped_velocity == 0.25, profile
+        assert gc.rot_stopped_velocity == 0.25, profile

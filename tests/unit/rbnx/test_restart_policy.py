@@ -62,7 +62,8 @@ def test_example_deploys_restart_on_failure() -> None:
     for name in ("sim", "minimal", "real_robot"):
         d = load_deploy(REPO / "examples" / name / "deploy.yaml", {})
         assert d.atlas_restart.mode == "on-failure"
-        assert d.entries and all(e.restart.mode == "on-failure" for e in d.entries), name
+        assert d.entries, name
+        assert all(e.restart.mode == "on-failure" for e in d.entries), name
 
 
 def test_bad_restart_fields_are_named(tmp_path: Path) -> None:

@@ -19,7 +19,8 @@ def test_generated_stubs_are_fresh(tmp_path: Path):
     committed = sorted(p.name for p in codegen.OUT_DIR.iterdir() if p.is_file())
     assert names == committed
     _, mismatch, errors = filecmp.cmpfiles(tmp_path, codegen.OUT_DIR, names, shallow=False)
-    assert not mismatch and not errors, f"stale stubs {mismatch}: run python -m robonix_api.codegen"
+    assert not mismatch, f"stale stubs {mismatch}: run python -m robonix_api.codegen"
+    assert not errors, f"stale stubs {mismatch}: run python -m robonix_api.codegen"
 
 
 def test_naming_rules_match_robonix():

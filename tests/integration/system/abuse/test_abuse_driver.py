@@ -59,10 +59,12 @@ def fuzz_driver(dep: Deployment, provider: str, stub: Any) -> None:
             SLOW.append(f"{provider} {took:.1f} s: command {command}, config_json {config_json[:120]!r} -> "
                         f"{(resp.state, resp.error[:200]) if resp else details[:200]}")
         if resp is None:
-            assert details and len(details) <= 1024, details[:300]
+            assert details, details[:300]
+            assert len(details) <= 1024, details[:300]
             assert details.startswith("config_json") or not with_token, details[:300]
         else:
-            assert resp.state and len(resp.error) <= 1024, (resp.state, resp.error[:300])
+            assert resp.state, (resp.state, resp.error[:300])
+            assert len(resp.error) <= 1024, (resp.state, resp.error[:300])
 
     run()
 
@@ -77,9 +79,12 @@ def restore(stub: Any, provider: str, deadline_s: float = 120) -> None:
         if resp.ok or resp.state != "deferred" or time.monotonic() > end:
             break
         time.sleep(0.5)
-    assert resp.ok and resp.state == "inactive", (provider, resp.state, resp.error)
+    assert resp.ok, (provider, resp.state, resp.error)
+    assert resp.state == "inactive", (provider, resp.state, resp.error)
     resp, _ = drive(stub, ACTIVATE, "")
-    assert resp is not None and resp.ok and resp.state == "active", (provider, resp)
+    assert resp is not None, (provider, resp)
+    assert resp.ok, (provider, resp)
+    assert resp.state == "active", (provider, resp)
 
 
 def test_every_driver_command_and_config(deployment: Deployment) -> None:

@@ -44,7 +44,8 @@ def check_reply(fn: Callable[[Any], Any], req: Any, what: str, with_token: bool 
     except grpc.RpcError as exc:
         code, details = exc.code(), exc.details() or ""
         assert code in CLEAR, f"{what}: {code.name}: {details[:500]}"
-        assert details and len(details) <= 1024, f"{what}: {code.name} with a {len(details)}-char message"
+        assert details, f"{what}: {code.name} with a {len(details)}-char message"
+        assert len(details) <= 1024, f"{what}: {code.name} with a {len(details)}-char message"
 
 
 def fuzz(dep: Deployment, strategy: st.SearchStrategy[Any], fn: Callable[[Any], Any], label: str) -> None:

@@ -100,7 +100,9 @@ def check_reply(kind: str, value: Any, what: str) -> None:
         return
     texts = [getattr(c, "text", "") for c in value.content]
     if value.is_error:
-        assert texts and texts[0] and len(texts[0]) <= 1024, f"{what}: error text {texts[:1]!r:.300}"
+        assert texts, f"{what}: error text {texts[:1]!r:.300}"
+        assert texts[0], f"{what}: error text {texts[:1]!r:.300}"
+        assert len(texts[0]) <= 1024, f"{what}: error text {texts[:1]!r:.300}"
     else:
         assert isinstance(value.structured_content, dict), f"{what}: no structured result: {texts[:1]!r:.300}"
 

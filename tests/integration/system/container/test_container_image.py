@@ -103,7 +103,8 @@ def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> No
 
         wait_until(booted, 240, "the boot with nav2 in the container")
         names = _engine("ps", "--format", "{{.Names}} {{.Image}}", timeout=60).stdout
-        assert "robonix-nav2-nav2-sim-navigation-" in names and image in names, names
+        assert "robonix-nav2-nav2-sim-navigation-" in names, names
+        assert image in names, names
         (state,) = (tmp_path / "state").glob("boot-*.json")
         state, detail, _ = navigate(json.loads(state.read_text())["atlas"], 5.8, 3.0, timeout_s=150,
                                    token=json.loads(state.read_text()).get("token", ""))

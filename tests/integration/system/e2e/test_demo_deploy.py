@@ -15,11 +15,10 @@ import time
 from pathlib import Path
 
 import pytest
+from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 from robonix_api.atlas_client import AtlasClient
 from robonix_api.types import LifecycleState
-
-from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
 

@@ -194,7 +194,8 @@ class System:
         """Navigate; require SUCCEEDED with the ground-truth pose within the profile's goal tolerance (plus
         LOC_SLACK for SLAM's own pose error). Returns the final ground truth and the top ground-truth speed."""
         r = self.navigate(*goal)
-        assert r.accepted and r.run_id, (goal, r.detail)
+        assert r.accepted, (goal, r.detail)
+        assert r.run_id, (goal, r.detail)
         top = [0.0]
 
         def done() -> Any:
@@ -224,7 +225,8 @@ class System:
         """DEACTIVATE, re-INIT with another params profile (replaces the session), ACTIVATE — as a deploy would."""
         assert self.nav.driver(DEACTIVATE)[:2] == (True, "inactive")
         ok, state, err = self.nav.driver(INIT, {**NAV_CFG, "params_profile": profile})
-        assert ok and state == "inactive", (profile, err, self.nav.log()[-3000:])
+        assert ok, (profile, err, self.nav.log()[-3000:])
+        assert state == "inactive", (profile, err, self.nav.log()[-3000:])
         assert self.nav.driver(ACTIVATE)[:2] == (True, "active")
         self.profile = profile
         assert f"nav2_params_{profile}.yml" in self.nav.log().rsplit("initialized: profile", 1)[-1].split("\n")[0]
@@ -283,7 +285,8 @@ def system(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory)
     assert slam.init(slam_cfg) == (True, "inactive", ""), slam.log()[-3000:]
     assert slam.driver(ACTIVATE) == (True, "active", "")
     ok, state, err = nav.init({**NAV_CFG, "params_profile": "sim"})
-    assert ok and state == "inactive", (err, nav.log()[-4000:])
+    assert ok, (err, nav.log()[-4000:])
+    assert state == "inactive", (err, nav.log()[-4000:])
     assert nav.driver(ACTIVATE) == (True, "active", "")
     with DdsNode(name="e2e_nav_test") as node:
         s = System(hal, slam, nav, node, map_dir)
@@ -295,7 +298,8 @@ def system(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory)
             s.truth.close()
     for p in (nav, slam, hal):
         log = p.log()
-        assert "Traceback" not in log and "loop iteration failed" not in log, (p.name, log[-4000:])
+        assert "Traceback" not in log, (p.name, log[-4000:])
+        assert "loop iteration failed" not in log, (p.name, log[-4000:])
 
 
 def test_box_dropped_into_path_is_avoided(system: System) -> None:
@@ -322,7 +326,8 @@ def test_box_dropped_into_path_is_avoided(system: System) -> None:
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts[i:], axis=0).T))])
     bx, by = pts[i + int(np.searchsorted(arc, 1.6))]
     ahead = pts[i:][(arc > 0.8) & (arc < 2.5)]
-    assert len(ahead) and np.all(np.abs(ahead[:, 1] - by) < 0.15), f"the plan is not straight ahead: {ahead}"
+    assert len(ahead), f"the plan is not straight ahead: {ahead}"
+    assert np.all(np.abs(ahead[:, 1] - by) < 0.15), f"the plan is not straight ahead: {ahead}"
     n_truth = system.truth.count()
     spawned = system.spawn("dropped_box", float(bx), float(by), 0.6, 0.6)
     assert spawned.ok, spawned.detail
@@ -358,10 +363,12 @@ def test_box_dropped_into_path_is_avoided(system: System) -> None:
     odoms = system.truth.since(n_truth)
     gap = footprint_clearance(odoms, (float(bx), float(by), 0.3, 0.3))
     # the sampled-geometry counterpart of the collision record (which stays the criterion): no overlap
-    assert gap > -0.01 and len(odoms) > 50, f"footprint overlapped the box by {-gap:.3f} m ({len(odoms)} poses)"
+    assert gap > -0.01, f"footprint overlapped the box by {-gap:.3f} m ({len(odoms)} poses)"
+    assert len(odoms) > 50, f"footprint overlapped the box by {-gap:.3f} m ({len(odoms)} poses)"
     assert float(np.max(np.abs(xy[:, 1] - by))) > 0.5, "the base did not swerve"
     col = system.collisions(t0)
-    assert col.ok and col.count == 0, (list(col.events), f"box at ({bx:.2f}, {by:.2f})", xy[::10].round(2).tolist())
+    assert col.ok, (list(col.events), f"box at ({bx:.2f}, {by:.2f})", xy[::10].round(2).tolist())
+    assert col.count == 0, (list(col.events), f"box at ({bx:.2f}, {by:.2f})", xy[::10].round(2).tolist())
 
 
 def test_unreachable_goal_in_closed_room(system: System) -> None:
@@ -382,11 +389,13 @@ def test_unreachable_goal_in_closed_room(system: System) -> None:
     else:
         t_end, detail = system.gt().sim_time, r.detail
         assert system.status(r.run_id).state == "FAILED"
-    assert "no path" in detail and "not reachable" in detail, detail
+    assert "no path" in detail, detail
+    assert "not reachable" in detail, detail
     assert t_end - g0.sim_time < 3.0, f"took {t_end - g0.sim_time:.1f} s sim to give up"
     g1 = system.sim_wait(1.0)
     assert math.hypot(g1.x - g0.x, g1.y - g0.y) < 0.05, ((g0.x, g0.y), (g1.x, g1.y))
-    assert math.hypot(g1.vx, g1.vy) < 0.02 and abs(g1.wz) < 0.05, (g1.vx, g1.vy, g1.wz)
+    assert math.hypot(g1.vx, g1.vy) < 0.02, (g1.vx, g1.vy, g1.wz)
+    assert abs(g1.wz) < 0.05, (g1.vx, g1.vy, g1.wz)
 
 
 def test_localization_profiles_on_saved_map(system: System) -> None:
@@ -397,7 +406,8 @@ def test_localization_profiles_on_saved_map(system: System) -> None:
     for goal in MAPPING_GOALS:
         system.go(goal)
     save = system.slam_rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="e2e_map", note="e2e"), timeout=60)
-    assert save.ok and save.map_id == "e2e_map", save.detail
+    assert save.ok, save.detail
+    assert save.map_id == "e2e_map", save.detail
     folder = system.map_dir / "e2e_map"
     assert {"map.yaml", "map.pgm", "session.npz", "meta.json"} <= {p.name for p in folder.iterdir()}
     saved = load_map_yaml(folder / "map.yaml")
@@ -447,6 +457,8 @@ def test_localization_profiles_on_saved_map(system: System) -> None:
     same_card(system.map_card(), card0)
     assert map_is_saved_one(), "the map changed while localizing"
     p = system.slam_rpc("get_pose").GetPose(map_pb2.GetPose_Request(), timeout=30)
-    assert p.ok and math.hypot(p.x - g.x, p.y - g.y) < 0.1, ((p.x, p.y), (g.x, g.y))
+    assert p.ok, ((p.x, p.y), (g.x, g.y))
+    assert math.hypot(p.x - g.x, p.y - g.y) < 0.1, ((p.x, p.y), (g.x, g.y))
     col = system.collisions(t0)
-    assert col.ok and col.count == 0, list(col.events)
+    assert col.ok, list(col.events)
+    assert col.count == 0, list(col.events)

@@ -42,7 +42,8 @@ def test_navigator_pause_mapping_sigstop_pauses_then_sigcont_goal_succeeds(tmp_p
             rec.stop()
         assert state == "SUCCEEDED", detail
         stopped = rec.stopped_after(t0)
-        assert stopped is not None and stopped[0] <= 1.0, stopped   # sim seconds to stand still
+        assert stopped is not None, stopped
+        assert stopped[0] <= 1.0, stopped  # sim seconds to stand still
         assert boot.shutdown() == []
 
 
@@ -60,9 +61,11 @@ def test_navigator_pause_mapping_sigkill_without_restart_fails_naming_it(tmp_pat
         finally:
             rec.stop()
         assert state == "FAILED", detail
-        assert detail.startswith("mapping lost:") and "input_grace_s=5 s" in detail, detail
+        assert detail.startswith("mapping lost:"), detail
+        assert "input_grace_s=5 s" in detail, detail
         failed_at = next(s.wall for s in rec.samples if s.state == "FAILED")
         assert failed_at - t0 >= 5.0                                   # not before the grace
         stopped = rec.stopped_after(t0)
-        assert stopped is not None and stopped[0] <= 1.0, stopped
+        assert stopped is not None, stopped
+        assert stopped[0] <= 1.0, stopped
         assert boot.shutdown() == []

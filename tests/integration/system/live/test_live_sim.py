@@ -296,7 +296,8 @@ def test_navigate_status_and_ctrl_c_cancels_from_a_terminal(sim: dict[str, Any])
     assert r.returncode == 0, r.stdout + r.stderr
     assert "SUCCEEDED" in r.stdout.splitlines()[-1], r.stdout
     st = _rbnx(atlas, "nav-status")
-    assert st.returncode == 0 and st.stdout.startswith("SUCCEEDED"), st.stdout + st.stderr
+    assert st.returncode == 0, st.stdout + st.stderr
+    assert st.stdout.startswith("SUCCEEDED"), st.stdout + st.stderr
 
     # Ctrl-C while running: the goal is canceled, exit 130.
     log = sim["tmp"] / "navigate.out"
@@ -317,7 +318,8 @@ def test_navigate_status_and_ctrl_c_cancels_from_a_terminal(sim: dict[str, Any])
                     60, "the run to show CANCELED")
     assert st.returncode == 0
     again = _rbnx(atlas, "cancel", run_id)
-    assert again.returncode in (0, 1) and again.stdout.strip(), again.stdout + again.stderr
+    assert again.returncode in (0, 1), again.stdout + again.stderr
+    assert again.stdout.strip(), again.stdout + again.stderr
     bad = _rbnx(atlas, "nav-status", "no-such-run")
     assert bad.returncode == 1
     assert "unknown" in bad.stderr

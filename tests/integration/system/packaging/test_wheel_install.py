@@ -50,7 +50,8 @@ def test_installed_wheel_has_no_checkout_behind_it(fresh_venv: Path, tmp_path: P
                        env=_clean_env(fresh_venv, tmp_path), capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     for line in r.stdout.splitlines():
-        assert str(fresh_venv) in line and str(REPO) not in line, line
+        assert str(fresh_venv) in line, line
+        assert str(REPO) not in line, line
 
 
 def test_demo_from_an_empty_directory(fresh_venv: Path, tmp_path: Path) -> None:

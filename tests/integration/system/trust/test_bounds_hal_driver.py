@@ -29,7 +29,9 @@ def hal(procs: Callable[..., Proc]) -> Iterator[Proc]:
                        ({**HAL_CONFIG, "rates": {"physics_rate_hz": 1e308}}, "rates.physics_rate_hz"),
                        ({**HAL_CONFIG, "seed": 10**40}, "seed")):
         ok, state, err = p.driver(INIT, bad)
-        assert not ok and field in err and len(err) < 1024, (field, err)
+        assert not ok, (field, err)
+        assert field in err, (field, err)
+        assert len(err) < 1024, (field, err)
     assert p.driver(INIT, {**HAL_CONFIG, "real_time_factor": 100}) == (True, "inactive", "")
     assert p.driver(INIT, HAL_CONFIG) == (True, "inactive", "")
     assert p.driver(ACTIVATE) == (True, "active", "")
@@ -43,7 +45,8 @@ def _invalid(call: Callable[[], object], field: str) -> str:
         call()
     assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value
     details = info.value.details() or ""
-    assert details.startswith(field + ":") and len(details) <= 1024, details
+    assert details.startswith(field + ":"), details
+    assert len(details) <= 1024, details
     return details
 
 
@@ -61,7 +64,8 @@ def test_teleport_and_spawn_out_of_bounds_are_refused(hal: Proc) -> None:
                        (sim_pb2.SpawnObstacle_Request(x=3, y=3, size_x=1, size_y=1, name="a\nb"), "name")):
         _invalid(lambda r=req: spawn.SpawnObstacle(r, timeout=30), field)
     g = gt.GetGroundTruth(sim_pb2.GetGroundTruth_Request(), timeout=30)
-    assert all(math.isfinite(v) for v in (g.x, g.y, g.theta, g.vx, g.vy, g.wz)) and abs(g.x - 1.5) < 0.2, g
+    assert all(math.isfinite(v) for v in (g.x, g.y, g.theta, g.vx, g.vy, g.wz)), g
+    assert abs(g.x - 1.5) < 0.2, g
     ok = tp.Teleport(sim_pb2.Teleport_Request(x=2.0, y=2.5, theta=0.3), timeout=30)
     assert ok.ok, ok.detail  # in bounds: still works
 

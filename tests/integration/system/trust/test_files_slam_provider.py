@@ -47,7 +47,8 @@ def slam(procs: Callable[..., Proc], tmp_path_factory: pytest.TempPathFactory) -
     assert p.init({"map_dir": str(map_dir)}, 60) == (True, "inactive", ""), p.log()[-3000:]
     assert p.driver(ACTIVATE) == (True, "active", "")
     yield Slam(p, map_dir)
-    assert p.proc.poll() is None and "Traceback" not in p.log(), p.log()[-3000:]
+    assert p.proc.poll() is None, p.log()[-3000:]
+    assert "Traceback" not in p.log(), p.log()[-3000:]
 
 
 def test_map_dir_outside_the_maps_root_is_refused(slam: Slam, tmp_path_factory: pytest.TempPathFactory) -> None:
@@ -55,13 +56,16 @@ def test_map_dir_outside_the_maps_root_is_refused(slam: Slam, tmp_path_factory: 
     assert slam.proc.driver(DEACTIVATE) == (True, "inactive", "")  # INIT is only taken while not ACTIVE
     for bad in (str(outside), "/", "/etc", str(slam.map_dir / ".." / ".." / "..")):
         ok, state, err = slam.proc.driver(INIT, {"map_dir": bad})
-        assert not ok and err.startswith("map_dir: ") and "outside the maps root" in err, (bad, state, err)
+        assert not ok, (bad, state, err)
+        assert err.startswith("map_dir: "), (bad, state, err)
+        assert "outside the maps root" in err, (bad, state, err)
     assert not outside.exists()
     # a refused INIT is an Err (state ERROR, as robonix does); a good one brings the service back
     assert slam.proc.driver(INIT, {"map_dir": str(slam.map_dir)}) == (True, "inactive", "")
     assert slam.proc.driver(ACTIVATE) == (True, "active", "")
     saved = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="kept"), timeout=60)
-    assert saved.ok and (slam.map_dir / "kept" / ".robonix-map").is_file(), saved.detail
+    assert saved.ok, saved.detail
+    assert (slam.map_dir / "kept" / ".robonix-map").is_file(), saved.detail
 
 
 def test_delete_map_spares_folders_the_store_did_not_write(slam: Slam) -> None:
@@ -69,13 +73,18 @@ def test_delete_map_spares_folders_the_store_did_not_write(slam: Slam) -> None:
     precious.mkdir()
     (precious / "thesis.txt").write_text("years of work")
     r = slam.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="precious"), timeout=30)
-    assert not r.ok and "marker" in r.detail and (precious / "thesis.txt").read_text() == "years of work", r.detail
+    assert not r.ok, r.detail
+    assert "marker" in r.detail, r.detail
+    assert (precious / "thesis.txt").read_text() == "years of work", r.detail
     saved = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="precious"), timeout=60)
-    assert not saved.ok and "marker" in saved.detail and (precious / "thesis.txt").is_file(), saved.detail
+    assert not saved.ok, saved.detail
+    assert "marker" in saved.detail, saved.detail
+    assert (precious / "thesis.txt").is_file(), saved.detail
     ok = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="scratch"), timeout=60)
     assert ok.ok, ok.detail
     r = slam.rpc("delete_map").DeleteMap(map_pb2.DeleteMap_Request(map_id="scratch"), timeout=30)
-    assert r.ok and not (slam.map_dir / "scratch").exists(), r.detail
+    assert r.ok, r.detail
+    assert not (slam.map_dir / "scratch").exists(), r.detail
 
 
 @pytest.mark.parametrize(("map_id", "note", "field"), [
@@ -89,7 +98,8 @@ def test_oversized_and_malformed_names_are_refused_briefly(slam: Slam, map_id: s
         slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id=map_id, note=note), timeout=60)
     assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value
     details = info.value.details() or ""
-    assert details.startswith(field + ":") and len(details) <= 1024, details[:300]
+    assert details.startswith(field + ":"), details[:300]
+    assert len(details) <= 1024, details[:300]
     assert not any("\n" in p.name for p in slam.map_dir.iterdir())
     listed = slam.rpc("list_maps").ListMaps(map_pb2.ListMaps_Request(), timeout=30)
     assert listed.ok

@@ -84,7 +84,8 @@ def test_boot_with_token_refuses_strangers_and_drives_via_cli_and_gateway(tmp_pa
         cli_env.pop(TOKEN_ENV, None)
         printed = subprocess.run(rbnx_cmd() + ["--atlas", atlas, "token"], env=cli_env, capture_output=True,
                                  text=True, timeout=60)
-        assert printed.returncode == 0 and printed.stdout.strip() == token, printed.stderr
+        assert printed.returncode == 0, printed.stderr
+        assert printed.stdout.strip() == token, printed.stderr
 
         with grpc.insecure_channel(atlas) as ch:
             stub = atlas_pb2_grpc.AtlasStub(ch)
@@ -136,7 +137,8 @@ def test_boot_with_token_refuses_strangers_and_drives_via_cli_and_gateway(tmp_pa
         assert m.state == atlas_pb2.STATE_ACTIVE
 
         state, accepted, _ = _gateway_calls(st["gateway"], printed.stdout.strip())
-        assert accepted and state == "SUCCEEDED", state
+        assert accepted, state
+        assert state == "SUCCEEDED", state
 
         boot.interrupt()
         boot.wait_all_exited()
