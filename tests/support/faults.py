@@ -170,11 +170,10 @@ class SimBoot:
     def restart_atlas(self) -> None:
         """Start an atlas at the same address and with the deployment's token (what a supervisor would do),
         in its own session."""
-        log = open(self.tmp / "logs" / "atlas-restarted.log", "a")
         env = dict(self.env, **({auth.TOKEN_ENV: self.token} if self.token else {}))
-        self.own_atlas = subprocess.Popen(atlas_cmd(self.listen), env=env, stdout=log, stderr=subprocess.STDOUT,
-                                          stdin=subprocess.DEVNULL, start_new_session=True)
-        log.close()
+        with open(self.tmp / "logs" / "atlas-restarted.log", "a") as log:  # the child keeps its own copy
+            self.own_atlas = subprocess.Popen(atlas_cmd(self.listen), env=env, stdout=log, stderr=subprocess.STDOUT,
+                                              stdin=subprocess.DEVNULL, start_new_session=True)
         self.seen[self.own_atlas.pid] = "atlas (restarted)"
 
     def states(self) -> dict[str, str]:

@@ -268,7 +268,7 @@ def test_client_address_and_enum_parsing(monkeypatch: pytest.MonkeyPatch) -> Non
     assert AtlasClient("10.0.0.1:1").address == "10.0.0.1:1"
     monkeypatch.delenv("ROBONIX_ATLAS")
     assert AtlasClient().address == "127.0.0.1:50051"
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="Kind: unknown name 'robot'"):
         AtlasClient("127.0.0.1:1").register("robot", "x", "ns")
 
 

@@ -52,7 +52,8 @@ def test_rbnx_boot_hal_only_and_sigint_leaves_nothing(tmp_path: Path) -> None:
             # declared right after ACTIVATE answers: wait for them rather than sample once
             wanted = {"robonix/primitive/chassis/odom", "robonix/primitive/chassis/twist_in",
                       "robonix/primitive/lidar/lidar", "robonix/primitive/sim/teleport"}
-            wait_until(lambda: wanted <= contracts(), 60, lambda: f"{sorted(wanted)} declared (has {sorted(contracts())})")
+            wait_until(lambda: wanted <= contracts(), 60,
+                       lambda: f"{sorted(wanted)} declared (has {sorted(contracts())})")
         with DdsNode(name="boot_test") as node:
             scan = node.wait_for_message("/scan", LaserScan, 60, "best_effort")
             assert scan is not None

@@ -280,10 +280,10 @@ def test_start_one_package_against_running_atlas(tmp_path: Path, minimal: tuple[
         atlas = boot.state()["atlas"]
         out = tmp_path / "start.out"
         with open(out, "w") as fh:
-            start = subprocess.Popen(rbnx_cmd() + ["--atlas", atlas, "start", "-p", str(deploy.parent / "odom_primitive"),
-                                                   "--name", "odom_extra", "--kind", "primitive", "-s", "topic=/odom2",
-                                                   "--log-dir", str(tmp_path / "startlogs"), "--no-progress"],
-                                     env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)
+            args = ["--atlas", atlas, "start", "-p", str(deploy.parent / "odom_primitive"), "--name", "odom_extra",
+                    "--kind", "primitive", "-s", "topic=/odom2", "--log-dir", str(tmp_path / "startlogs"),
+                    "--no-progress"]
+            start = subprocess.Popen(rbnx_cmd() + args, env=env, cwd=tmp_path, stdout=fh, stderr=subprocess.STDOUT)
         wait_until(lambda: "odom_extra is active" in out.read_text(), 120, "rbnx start to report active")
         caps = json.loads(run(["--atlas", atlas, "caps", "--json", "-v", "--id", "odom_extra"], env, tmp_path).stdout)
         odom = [c for c in caps[0]["capabilities"] if c["contract_id"] == "robonix/primitive/chassis/odom"]

@@ -88,8 +88,8 @@ def test_clock(peer: subprocess.Popen, node: DdsNode) -> None:
 
 def test_peer_stops_cleanly_by_pid() -> None:
     """A fresh peer exits on SIGTERM (sent to its PID) within the deadline, leaving nothing behind."""
-    proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("dds_peer.py"))], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
+    proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("dds_peer.py"))], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout.readline().strip() == "READY"
         proc.terminate()

@@ -115,7 +115,8 @@ def test_liveliness_writer_matches_a_ros2_style_reader(node) -> None:
     """ROS 2 readers ask for AUTOMATIC liveliness with an infinite lease: they must match our writers."""
     pub = node.create_publisher("/live_match", Odometry, "reliable")
     assert describe(pub.qos)["reliability"] == "reliable"
-    ros_like = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)), Policy.Liveliness.Automatic(duration(infinite=True)),
+    ros_like = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
+                   Policy.Liveliness.Automatic(duration(infinite=True)),
                    Policy.DataRepresentation(use_cdrv0_representation=True))
     reader = DataReader(node.participant, node._topic("/live_match", Odometry), ros_like)
     try:

@@ -195,7 +195,8 @@ def test_reregisters_after_atlas_restart(providers, client: AtlasClient, atlas_s
         rec = wait_until(lambda: provider_record(client, "sdk_p1"), timeout_s=60, what="re-registration")
         wait_until(lambda: provider_record(client, "sdk_p1").state == LifecycleState.ACTIVE, what="ACTIVE again")
         rec = provider_record(client, "sdk_p1")
-        assert {(c.contract_id, c.transport.label) for c in rec.capabilities} == {(DRIVER, "grpc"), ("robonix/test/driver", "grpc"), (NAV, "grpc")}
+        assert {(c.contract_id, c.transport.label) for c in rec.capabilities} == {
+            (DRIVER, "grpc"), ("robonix/test/driver", "grpc"), (NAV, "grpc")}
         assert driver_endpoint(client, "sdk_p1") == svc.grpc_endpoint
     finally:
         svc.stop()

@@ -116,7 +116,8 @@ def test_atlas_robonix_calls_on_a_real_atlas(atlas_server) -> None:  # type: ign
         assert atlas.register_service("c_map", "robonix/service/map") == "c_map"
         assert atlas.register_skill("c_skill", "robonix/skill/demo") == "c_skill"
         # robonix-api's order, then ours: both land the same way
-        assert atlas.declare_capability("c_lidar", LIDAR, Transport.ROS2, "/c_scan", Ros2Params("best_effort")) == "/c_scan"
+        scan = atlas.declare_capability("c_lidar", LIDAR, Transport.ROS2, "/c_scan", Ros2Params("best_effort"))
+        assert scan == "/c_scan"
         atlas.declare_capability("c_map", GET_MODE, "127.0.0.1:9", "grpc")
         atlas.declare_capability(provider_id="c_map", contract_id=GET_POSE, transport="mcp",
                                  endpoint="http://127.0.0.1:9/mcp/", description="pose")
@@ -358,7 +359,8 @@ def test_lifecycle_module_builds_a_driver_servicer() -> None:
     from robonix_api import lifecycle
     from robonix_api.proto_gen import robonix_contracts_pb2_grpc
 
-    assert (lifecycle.CMD_INIT, lifecycle.CMD_ACTIVATE, lifecycle.CMD_DEACTIVATE, lifecycle.CMD_SHUTDOWN) == (0, 1, 2, 3)
+    commands = (lifecycle.CMD_INIT, lifecycle.CMD_ACTIVATE, lifecycle.CMD_DEACTIVATE, lifecycle.CMD_SHUTDOWN)
+    assert commands == (0, 1, 2, 3)
     assert lifecycle.driver_pascal_for_namespace("robonix/primitive/lidar") == "RobonixPrimitiveLidarDriver"
     assert lifecycle.build_lifecycle_servicer("robonix/nowhere", robonix_contracts_pb2_grpc,
                                               lifecycle_pb2.Driver_Response) is None

@@ -40,7 +40,8 @@ def hard() -> dict[int, Pair]:
 
 def _show(name: str, on: SlamLoopResult, off: SlamLoopResult) -> None:
     print(f"\n{name} seed {on.seed}: ATE LC on {on.ate_rmse * 100:.2f} cm ({on.loop_closures} closures), LC off "
-          f"{off.ate_rmse * 100:.2f} cm, odometry {on.odom_ate_rmse * 100:.1f} cm; IoU on {on.iou:.3f} off {off.iou:.3f}")
+          f"{off.ate_rmse * 100:.2f} cm, odometry {on.odom_ate_rmse * 100:.1f} cm; "
+          f"IoU on {on.iou:.3f} off {off.iou:.3f}")
 
 
 def _drive_ok(on: SlamLoopResult) -> None:

@@ -286,7 +286,8 @@ def test_map_card_grpc_cli_and_mcp(env: Env, tmp_path: Path) -> None:
             return names, await c.call_tool("get_mode", {})
 
     names, result = asyncio.run(asyncio.wait_for(talk(), 60))
-    assert {"save_map", "load_map", "list_maps", "switch_mode", "get_mode", "get_pose", "reset_map", "map_card"} <= names
+    assert {"save_map", "load_map", "list_maps", "switch_mode", "get_mode", "get_pose", "reset_map",
+            "map_card"} <= names
     assert result.structured_content["ok"] is True
     assert result.structured_content["mode"] == "localization"
 

@@ -50,7 +50,7 @@ def test_enum_parse(enum, value, expected) -> None:
 def test_enum_parse_errors() -> None:
     with pytest.raises(ValueError, match="ros3"):
         Transport.parse("ros3")
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="Kind: unknown value 7"):
         Kind.parse(7)
     with pytest.raises(TypeError):
         Kind.parse(1.5)

@@ -19,7 +19,8 @@ from slam_service.config import ConfigError, parse_config
 
 @pytest.mark.parametrize(("raw", "field"), [
     ({"real_time_factor": 1e308}, "real_time_factor"), ({"real_time_factor": 100.5}, "real_time_factor"),
-    ({"rates": {"physics_rate_hz": 1e308}}, "rates.physics_rate_hz"), ({"rates": {"scan_rate_hz": 1e6}}, "rates.scan_rate_hz"),
+    ({"rates": {"physics_rate_hz": 1e308}}, "rates.physics_rate_hz"),
+    ({"rates": {"scan_rate_hz": 1e6}}, "rates.scan_rate_hz"),
     ({"seed": 2**70}, "seed"), ({"scene": "s" * 5000}, "scene"),
 ])
 def test_hal_config_out_of_range(raw: dict, field: str) -> None:

@@ -28,7 +28,7 @@ def test_topic_names() -> None:
     assert dds_topic_name("/scan") == "rt/scan"
     assert dds_topic_name("map") == "rt/map"
     assert dds_topic_name("/robot1/cmd_vel") == "rt/robot1/cmd_vel"
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="invalid topic name '/'"):
         dds_topic_name("/")
 
 
@@ -57,7 +57,7 @@ def test_scan_builder() -> None:
     angles, ranges = scan_to_numpy(LaserScan.deserialize(s.serialize()))
     assert angles.shape == ranges.shape == (360,)
     assert ranges[-1] == pytest.approx(2.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="intensities has 1 values, ranges has 2"):
         laser_scan([1.0, 2.0], 0.0, 0.1, intensities=[1.0])
 
 

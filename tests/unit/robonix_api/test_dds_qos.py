@@ -33,7 +33,7 @@ def test_transient_local_is_latched() -> None:
 
 
 def test_unknown_preset_lists_valid_names() -> None:
-    with pytest.raises(ValueError) as e:
+    with pytest.raises(ValueError, match="unknown QoS preset 'durable'") as e:
         qos_profile("durable")
     for n in QOS_NAMES:
         assert n in str(e.value)

@@ -83,5 +83,5 @@ def test_cache_prunes_old_stamps() -> None:
 
 def test_same_frame_and_bad_input(buf: TfBuffer) -> None:
     assert buf.lookup("odom", "odom") == (0.0, 0.0, 0.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="frames must be non-empty and differ"):
         buf.set_pose2d("a", "a", 0, 0, 0, 0)

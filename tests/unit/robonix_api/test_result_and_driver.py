@@ -95,7 +95,8 @@ def test_exception_and_bad_return_become_err() -> None:
     assert "bool" in r.error
 
 
-@pytest.mark.parametrize(("text", "expected"), [("", {}), ("  ", {}), ("[1, 2]", {}), ("3", {}), ('{"a": 1}', {"a": 1})])
+@pytest.mark.parametrize(("text", "expected"),
+                         [("", {}), ("  ", {}), ("[1, 2]", {}), ("3", {}), ('{"a": 1}', {"a": 1})])
 def test_config_json_lenient(text: str, expected: dict) -> None:
     assert parse_config_json(text) == expected
 

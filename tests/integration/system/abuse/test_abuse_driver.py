@@ -32,7 +32,8 @@ KEYS = {"abuse_hal": list(HalConfig.model_fields), "abuse_mapping": list(SlamCon
 EXAMPLES = settings(max_examples=30, deadline=None, derandomize=True, database=None,
                     suppress_health_check=list(HealthCheck))
 SLOW: list[str] = []
-COMMANDS = st.one_of(st.sampled_from([INIT, INIT, ACTIVATE, DEACTIVATE]), st.integers(0, 2**32 - 1).filter(lambda c: c != 3))
+COMMANDS = st.one_of(st.sampled_from([INIT, INIT, ACTIVATE, DEACTIVATE]),
+                     st.integers(0, 2**32 - 1).filter(lambda c: c != 3))
 
 
 def drive(stub: Any, command: int, config_json: str, with_token: bool = True) -> tuple[Any, str]:
@@ -41,9 +42,10 @@ def drive(stub: Any, command: int, config_json: str, with_token: bool = True) ->
         return stub.Driver(lifecycle_pb2.Driver_Request(command=command, config_json=config_json), timeout=120,
                            metadata=auth.metadata() if with_token else None), ""
     except grpc.RpcError as exc:
-        expected = grpc.StatusCode.INVALID_ARGUMENT if with_token else grpc.StatusCode.UNAUTHENTICATED
-        assert exc.code() == expected, f"{exc.code().name}: {(exc.details() or '')[:300]}"
-        return None, exc.details() or ""
+        code, details = exc.code(), exc.details() or ""
+    expected = grpc.StatusCode.INVALID_ARGUMENT if with_token else grpc.StatusCode.UNAUTHENTICATED
+    assert code == expected, f"{code.name}: {details[:300]}"
+    return None, details
 
 
 def fuzz_driver(dep: Deployment, provider: str, stub: Any) -> None:

@@ -13,7 +13,8 @@ import sys
 
 
 def check(path, checked, missing):
-    tree = ast.parse(open(path).read(), path)
+    with open(path) as fh:
+        tree = ast.parse(fh.read(), path)
     import robonix_api
 
     providers = {}

@@ -138,7 +138,8 @@ DOCUMENTED_DIFFERENCES = {
     "Capability(params): positional place 5 differs",
     "CapabilityProvider(capabilities): default () != <factory>",
     *(f"Channel({f}): positional place {i} differs"
-      for i, f in enumerate(("provider_id", "contract_id", "transport", "endpoint", "channel_id", "params", "_closer"))),
+      for i, f in enumerate(("provider_id", "contract_id", "transport", "endpoint", "channel_id", "params",
+                             "_closer"))),
     *(f"ContractDescriptor({f}): positional place {i} differs"
       for i, f in enumerate(("description", "msg_fields", "srv_request_fields", "srv_response_fields"), start=7)),
     "Primitive.create_subscription(declare): default True != False",

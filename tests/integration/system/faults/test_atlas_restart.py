@@ -32,7 +32,8 @@ def _active(atlas: str) -> set[str]:
         return set()
 
 
-def test_atlas_sigkill_is_restarted_and_every_provider_re_registers_active(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_atlas_sigkill_is_restarted_and_every_provider_re_registers_active(tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     with sim_boot(tmp_path, monkeypatch) as run:
         st = run.state()
         atlas = run.atlas

@@ -60,7 +60,8 @@ def save_map(atlas: str, map_id: str, map_dir: Path) -> GridMap:
     return load_map_yaml(map_dir / map_id / "map.yaml")
 
 
-def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     map_dir = tmp_path / "maps"
     autosave = map_dir / ".autosave" / "mapping" / "session.npz"
     with sim_boot(tmp_path, monkeypatch, ROBONIX_MAP_DIR=str(map_dir)) as run:

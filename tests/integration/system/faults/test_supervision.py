@@ -41,7 +41,8 @@ def _children(state_file: Path) -> dict[str, dict]:
     return {c["name"]: c for c in json.loads(state_file.read_text())["children"]}
 
 
-def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_succeeds(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_succeeds(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     with sim_boot(tmp_path, monkeypatch) as run:
         atlas, state_file, env = run.atlas, run.state_file, run.env
 

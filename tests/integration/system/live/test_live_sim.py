@@ -5,7 +5,8 @@
 - the dashboard (`rbnx dashboard`) in headless Debian chromium: no console error, the canvas shows the
   map (dark pixels where /map has walls, light where it is free), a click on a free cell sends a goal,
   the drawn robot moves, the status line says SUCCEEDED, deactivate/activate of mapping via its buttons
-  changes the shown state; a drag sets the goal's heading and the cancel button cancels it. Screenshots are kept in tests/artifacts/ (dashboard.png, dashboard_navigating.png).
+  changes the shown state; a drag sets the goal's heading and the cancel button cancels it. Screenshots
+  are kept in tests/artifacts/ (dashboard.png, dashboard_navigating.png).
 """
 
 from __future__ import annotations

@@ -54,7 +54,8 @@ def test_teleport_and_spawn_out_of_bounds_are_refused(hal: Proc) -> None:
     tp = hal.stub(SIM + "teleport", rpc.RobonixPrimitiveSimTeleportStub)
     gt = hal.stub(SIM + "ground_truth", rpc.RobonixPrimitiveSimGroundTruthStub)
     spawn = hal.stub(SIM + "spawn_obstacle", rpc.RobonixPrimitiveSimSpawnObstacleStub)
-    for req, field in ((sim_pb2.Teleport_Request(x=1e308, y=1.5), "x"), (sim_pb2.Teleport_Request(x=1.5, y=-1e308), "y"),
+    for req, field in ((sim_pb2.Teleport_Request(x=1e308, y=1.5), "x"),
+                       (sim_pb2.Teleport_Request(x=1.5, y=-1e308), "y"),
                        (sim_pb2.Teleport_Request(x=1.5, y=1.5, theta=1e308), "theta"),
                        (sim_pb2.Teleport_Request(x=8.5, y=1.5), "x")):  # bounds [0, 6] + 2 m margin
         _invalid(lambda r=req: tp.Teleport(r, timeout=30), field)

@@ -56,7 +56,8 @@ def _navigate(endpoint: str, metadata: list[tuple[str, str]] | None) -> navigati
 
 def test_grpc_driver_and_navigate_need_the_token_status_does_not(provider: Service) -> None:
     ep = provider.grpc_endpoint
-    for md, code in ((None, grpc.StatusCode.UNAUTHENTICATED), ([(auth.METADATA_KEY, "x")], grpc.StatusCode.PERMISSION_DENIED)):
+    for md, code in ((None, grpc.StatusCode.UNAUTHENTICATED),
+                     ([(auth.METADATA_KEY, "x")], grpc.StatusCode.PERMISSION_DENIED)):
         with pytest.raises(grpc.RpcError) as err:
             _navigate(ep, md)
         assert err.value.code() == code
@@ -69,7 +70,8 @@ def test_grpc_driver_and_navigate_need_the_token_status_does_not(provider: Servi
 
     assert _navigate(ep, [(auth.METADATA_KEY, TOKEN)]).accepted
     with auth.channel(ep) as ch:  # the SDK's channel sends $ROBONIX_DEPLOY_TOKEN itself
-        assert rc.RobonixServiceNavigationNavigateStub(ch).Navigate(navigation_pb2.Navigate_Request(), timeout=10).accepted
+        reply = rc.RobonixServiceNavigationNavigateStub(ch).Navigate(navigation_pb2.Navigate_Request(), timeout=10)
+        assert reply.accepted
     with grpc.insecure_channel(ep) as ch:  # read-only: open
         st = rc.RobonixServiceNavigationNavigateStatusStub(ch).GetNavigationStatus(
             navigation_pb2.GetNavigationStatus_Request(), timeout=10)
