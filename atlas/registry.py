@@ -88,10 +88,29 @@ def is_valid_ros2_name(name: str) -> bool:
         rest = rest[1:]
     if not rest:
         return False  # "/" or "~/" alone names nothing
-    for token in rest.split("/"):
-        if not _TOKEN.match(token) or "__" in token or token.endswith("_"):
-            return False
-    return True
+    return all(_TOKEN.match(token) and "__" not in token and not token.endswith("_") for token in rest.split("/"))
+
+
+def _check_transport_params(transport: Transport | int, params: TransportParams | None) -> Transport:
+    """The declared transport, checked together with its params (INVALID_ARGUMENT naming the field)."""
+    try:
+        transport = Transport(transport)
+    except ValueError:
+        raise _invalid(f"transport: unknown value {transport}") from None
+    if transport == Transport.UNSPECIFIED:
+        raise _invalid("transport: must be TRANSPORT_GRPC, TRANSPORT_ROS2 or TRANSPORT_MCP")
+    if params is None:
+        raise _invalid(f"params: must be set (params.{transport.label} for transport {transport.name})")
+    if params.transport != transport:
+        raise _invalid(f"params: params.{params.transport.label} does not match transport {transport.name}")
+    if isinstance(params, McpParams) and params.input_schema_json:
+        try:
+            schema = json.loads(params.input_schema_json)
+        except ValueError as exc:
+            raise _invalid(f"params.mcp.input_schema_json: not valid JSON ({exc})") from None
+        if not isinstance(schema, dict):
+            raise _invalid("params.mcp.input_schema_json: must be a JSON object")
+    return transport
 
 
 def _ros2_token(text: str) -> str:
@@ -406,9 +425,9 @@ class Registry:
         with self._lock:
             p = self._get(id)
             prev = p.state
-            if prev != state and state not in (LifecycleState.ERROR, LifecycleState.TERMINATED):
-                if (prev, state) not in _LEGAL_EDGES:
-                    log.warning("%s: unusual lifecycle edge %s -> %s (stored)", id, prev.name, state.name)
+            if (prev != state and state not in (LifecycleState.ERROR, LifecycleState.TERMINATED)
+                    and (prev, state) not in _LEGAL_EDGES):
+                log.warning("%s: unusual lifecycle edge %s -> %s (stored)", id, prev.name, state.name)
             p.pushed_state = state
             p.state_detail = detail
             if state == LifecycleState.TERMINATED:
@@ -431,25 +450,7 @@ class Registry:
             raise _invalid("provider_id: must not be empty")
         if not contract_id:
             raise _invalid("contract_id: must not be empty")
-        try:
-            transport = Transport(transport)
-        except ValueError:
-            raise _invalid(f"transport: unknown value {transport}") from None
-        if transport == Transport.UNSPECIFIED:
-            raise _invalid("transport: must be TRANSPORT_GRPC, TRANSPORT_ROS2 or TRANSPORT_MCP")
-        if params is None:
-            raise _invalid(f"params: must be set (params.{transport.label} for transport {transport.name})")
-        if params.transport != transport:
-            raise _invalid(
-                f"params: params.{params.transport.label} does not match transport {transport.name}"
-            )
-        if isinstance(params, McpParams) and params.input_schema_json:
-            try:
-                schema = json.loads(params.input_schema_json)
-            except ValueError as exc:
-                raise _invalid(f"params.mcp.input_schema_json: not valid JSON ({exc})") from None
-            if not isinstance(schema, dict):
-                raise _invalid("params.mcp.input_schema_json: must be a JSON object")
+        transport = _check_transport_params(transport, params)
         if not endpoint and transport != Transport.ROS2:
             raise _invalid(f"endpoint: must not be empty for transport {transport.name}")
         if transport != Transport.ROS2 and self._endpoint_check is not None:

@@ -132,4 +132,5 @@ def resolve(flags: dict[str, Any], config_json: str | None) -> AtlasSettings:
                          heartbeat_timeout_ms=int(values["heartbeat_timeout_ms"]),
                          eviction_interval_ms=int(values["eviction_interval_ms"]),
                          gc_after_terminated_ms=int(values["gc_after_terminated_ms"]),
-                         log_level=str(values["log_level"]), allowed_hosts=hosts, auth=js.auth or "token", ignored_keys=tuple(sorted(js.model_extra or {})))
+                         log_level=str(values["log_level"]), allowed_hosts=hosts, auth=js.auth or "token",
+                         ignored_keys=tuple(sorted(js.model_extra or {})))

@@ -279,7 +279,8 @@ def main(argv: list[str] | None = None) -> int:
         st = results[name]["raw_stub"]
         print(f"{name:8s} p50 {st['p50_ms']:.3f} ms  p99 {st['p99_ms']:.3f} ms  (n={st['n']})")
     print(
-        f"goals (p50 <= {GOAL_P50_MS} ms, p99 <= {GOAL_P99_MS} ms): {'met' if results['goals']['all_met'] else 'NOT met'}"
+        f"goals (p50 <= {GOAL_P50_MS} ms, p99 <= {GOAL_P99_MS} ms): "
+        f"{'met' if results['goals']['all_met'] else 'NOT met'}"
     )
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text(json.dumps(results, indent=2) + "\n")

@@ -49,7 +49,8 @@ def _fmt(v: float | None, unit: str = "s") -> str:
 
 
 def run_case(target: str, kind: str, rtf: str, tmp: Path) -> dict[str, Any]:
-    out: dict[str, Any] = {"target": target, "fault": "SIGKILL" if kind == "kill" else f"SIGSTOP {STOP_S:g} s + SIGCONT"}
+    fault = "SIGKILL" if kind == "kill" else f"SIGSTOP {STOP_S:g} s + SIGCONT"
+    out: dict[str, Any] = {"target": target, "fault": fault}
     with SimBoot(tmp, rtf=rtf) as boot:
         run_id = boot.navigate(*GOAL)
         rec = Recorder(boot, run_id).start()
@@ -164,7 +165,8 @@ def main() -> int:
             print(json.dumps(r), flush=True)
     _table(results)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"machine": platform.node(), "rtf": args.rtf, "when": time.strftime("%Y-%m-%d %H:%M:%S"),
+    args.out.write_text(json.dumps({"machine": platform.node(), "rtf": args.rtf,
+                                    "when": time.strftime("%Y-%m-%d %H:%M:%S"),
                                     "stop_s": STOP_S, "goal": GOAL, "next_goal": NEXT_GOAL, "cases": results},
                                    indent=2) + "\n")
     print(f"wrote {args.out}")

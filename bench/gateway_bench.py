@@ -105,7 +105,8 @@ def main() -> int:
         server.stop()
     res["machine"] = {"python": platform.python_version(), "cpus": __import__("os").cpu_count()}
     for k in ("direct_call", "gateway_call", "gateway_list_tools", "gateway_list_services"):
-        print(f"{k:<24} p50 {res[k]['p50_ms']:7.2f} ms   p95 {res[k]['p95_ms']:7.2f} ms   p99 {res[k]['p99_ms']:7.2f} ms")
+        r = res[k]
+        print(f"{k:<24} p50 {r['p50_ms']:7.2f} ms   p95 {r['p95_ms']:7.2f} ms   p99 {r['p99_ms']:7.2f} ms")
     print(f"{'announce after register':<24} {res['announce_after_register_s']:.3f} s")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

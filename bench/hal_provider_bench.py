@@ -3,8 +3,8 @@
 One command: ``python bench/hal_provider_bench.py`` (prints the figure, writes
 bench/results/hal_provider.json). It runs the provider's own loop (``SimLoop`` + ``Outputs``, the code
 ``python -m hal_panda_mobile`` runs after CMD_INIT) at real_time_factor 0 with physics 500 Hz, 10 Hz
-360-beam /scan, 50 Hz /odom + TF, 100 Hz /clock and 10 Hz ground truth (the provider's defaults), for a fixed wall time while
-the base drives circles. A subscriber in a separate process receives /scan and /odom, so the writers
+360-beam /scan, 50 Hz /odom + TF, 100 Hz /clock and 10 Hz ground truth (the provider's defaults), for a fixed
+wall time while the base drives circles. A subscriber in a separate process receives /scan and /odom, so the writers
 really serialize and deliver (matched reliable readers), and confirms the message counts. The atlas is
 left out: it is not on the loop's path. Own ROS_DOMAIN_ID, loopback-only Cyclone config.
 """

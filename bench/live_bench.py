@@ -39,7 +39,7 @@ SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
 from support.boot import RbnxBoot, rbnx_cmd  # noqa: E402
 from support.browser import free_port, launch  # noqa: E402
 
-from rbnx.demo_boot import pick_domain_id  # noqa: E402
+from rbnx.demo.boot import pick_domain_id  # noqa: E402
 
 
 def _pct(v: list[float], q: float) -> float:
@@ -50,7 +50,7 @@ def _pct(v: list[float], q: float) -> float:
 def dashboard_latency(samples: int) -> dict[str, Any]:
     from playwright.sync_api import sync_playwright
 
-    from rbnx.dashboard.cli import start_background
+    from rbnx.dashboard.launch import start_background
     from robonix_api.dds import DdsNode, OccupancyGrid, StaticTfBroadcaster, TfBroadcaster
     from robonix_api.dds.convert import header
 

@@ -9,6 +9,7 @@ grid, median planning time. Everything but the planning time is sim-time and det
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import platform
@@ -27,10 +28,10 @@ from robonix_eval.slam_loop import ROUTES
 SCENES = ("apartment", "office", "warehouse", "kitchen")
 
 
-def run_scene(scene: str, n: int, seed: int, lidar: LidarNoise | None = None) -> dict:
-    opts = PipelineOptions(scene=scene, seed=seed)
+def run_scene(scene: str, n: int, seed: int, lidar: LidarNoise | None = None, controller: str = "profile") -> dict:
+    opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
     if lidar is not None:
-        opts = PipelineOptions(scene=scene, seed=seed, lidar_noise=lidar)
+        opts = PipelineOptions(scene=scene, seed=seed, lidar_noise=lidar, controller=controller)
     pipe = Pipeline(opts)
     goals = sample_goals(pipe.sim, n, seed=seed)
     t0 = time.perf_counter()
@@ -121,21 +122,24 @@ def main() -> None:
                     help="also run a second pass with this lidar range noise (m) and dropout probability, "
                          "e.g. 0.03 0.05")
     ap.add_argument("--no-hard", action="store_true", help="skip the hard scenarios (noisy route, 0.8 m gap)")
+    ap.add_argument("--controller", choices=("profile", "pursuit", "mppi"), default="profile",
+                    help="the sim profile's controller plugin, or override it")
     args = ap.parse_args()
     passes = {"nominal": None}
     if args.lidar_noise:
         passes["noisy"] = LidarNoise(noise_std=args.lidar_noise[0], dropout_prob=args.lidar_noise[1])
     report = {}
     for label, lidar in passes.items():
-        rows = [run_scene(s, args.goals, args.seed, lidar) for s in args.scenes]
+        rows = [run_scene(s, args.goals, args.seed, lidar, args.controller) for s in args.scenes]
         print(f"== {label}" + (f": lidar noise {lidar.noise_std} m, dropout {lidar.dropout_prob}" if lidar else ""))
-        report[label] = {"lidar_noise": lidar.model_dump() if lidar else None, **_table(rows)}
+        report[label] = {"lidar_noise": dataclasses.asdict(lidar) if lidar else None, **_table(rows)}
     hard = [] if args.no_hard else run_hard(args.seed)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     nominal = report["nominal"]
     out.write_text(json.dumps({"bench": "nav_suite", "seed": args.seed, "machine": platform.machine(),
-                               "python": platform.python_version(), "overall": nominal["overall"],
+                               "python": platform.python_version(), "controller": args.controller,
+                               "overall": nominal["overall"],
                                "scenes": nominal["scenes"], "passes": report,
                                "hard": hard}, indent=2, default=float))
     print(f"wrote {out}")

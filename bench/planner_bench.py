@@ -30,11 +30,11 @@ from nav2_wrapper.core import (
     ControllerConfig,
     Costmap,
     CostmapConfig,
-    Footprint,
     GlobalPlanner,
     HolonomicController,
     PlannerConfig,
 )
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
 RES = 0.05
@@ -75,9 +75,10 @@ def pick_pairs(cm: Costmap, n: int, rng: np.random.Generator) -> list[tuple[tupl
     return pairs
 
 
-def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float], steps: int = 400) -> list[float]:
+def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float],
+                          steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     local = Costmap(CostmapConfig(name="local", rolling_window=True, width=4.0, height=4.0, obstacle_layer=False,
                                   cost_scaling_factor=3.0, inflation_radius=0.55, footprint=fp))
     grid = GridMap(np.where(cm.static == 254, 100, 0).astype(np.int8), RES)
@@ -107,7 +108,7 @@ def main() -> None:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--no-exact", action="store_true", help="skip the exact-optimum comparison (faster)")
     args = ap.parse_args()
-    fp = Footprint.from_robot_yaml()
+    fp = load_footprint()
     planner = GlobalPlanner(PlannerConfig(heuristic_weight=args.weight))
     exact = GlobalPlanner(PlannerConfig(heuristic_weight=1.0, smooth_path=False))
     results: dict = {"machine": platform.processor() or platform.machine(), "pairs": args.pairs,
@@ -159,10 +160,12 @@ def main() -> None:
             row["cost_vs_exact_optimal_max"] = round(float(np.max(cost_ratio)), 4)
         results["densities"][f"{dens:.2f}"] = row
         print(f"density {row['obstacle_density']:.2f}: plan median {row['plan_ms_median']:.1f} ms, "
-              f"p95 {row['plan_ms_p95']:.1f} ms, max {row['plan_ms_max']:.1f} ms, path median {row['path_m_median']:.1f} m, "
+              f"p95 {row['plan_ms_p95']:.1f} ms, max {row['plan_ms_max']:.1f} ms, "
+              f"path median {row['path_m_median']:.1f} m, "
               f"length/straight {row['length_vs_straight_line_median']:.3f}"
               + (f", length/exact-optimal {row['length_vs_exact_optimal_median']:.3f}, "
-                 f"cost/exact-optimal {row['cost_vs_exact_optimal_median']:.3f} (max {row['cost_vs_exact_optimal_max']:.3f})"
+                 f"cost/exact-optimal {row['cost_vs_exact_optimal_median']:.3f} "
+                 f"(max {row['cost_vs_exact_optimal_max']:.3f})"
                  if len_ratio else "") + f", failures {fails}, costmap build {t_costmap:.2f} s")
         s, g = pairs[0]
         ctrl_times += controller_step_times(cm, planner.plan(cm, s, g).path, g)

@@ -22,7 +22,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from hal_panda_mobile.sim import PandaMobileSim, load_robot_description, load_scene
+from hal_panda_mobile.files import load_robot_description, load_scene
+from hal_panda_mobile.sim import PandaMobileSim
 from hal_panda_mobile.sim.lidar import VISIBLE_GROUPS
 
 RESULTS = Path(__file__).resolve().parent / "results" / "sim.json"

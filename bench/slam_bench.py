@@ -1,7 +1,7 @@
 """SLAM core benchmark: throughput, trajectory error, map quality, loop-closure optimisation time.
 
 One command: ``python bench/slam_bench.py`` (prints a table, writes bench/results/slam.json).
-Worlds are the pure-numpy synthetic ones (slam_service.core.synthetic): a two-lap apartment ring and a
+Worlds are the pure-numpy synthetic ones (robonix_eval.synthetic): a two-lap apartment ring and a
 30 x 20 m warehouse loop, 360-beam lidar at 10 Hz, 3 cm range noise (2 cm warehouse), 5 % dropouts,
 drifting odometry. Recording (ray casting) is not timed; only ``SlamEngine.process`` is.
 """
@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from robonix_eval.synthetic import OdomDrift, Recording, World, apartment_world, drive, warehouse_world
 from slam_service.core import SlamConfig, SlamEngine, ate_rmse, occupied_iou
-from slam_service.core.synthetic import OdomNoise, Recording, World, apartment_world, drive, warehouse_world
 
 SLAM_TOOLBOX_SCANS_PER_S = 50.0  # slam_toolbox's "5x real time" claim at a 10 Hz lidar
-DRIFT = OdomNoise(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
+DRIFT = OdomDrift(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
 
 
 def worlds() -> list[tuple[World, dict]]:
@@ -112,13 +112,15 @@ def main() -> None:
               f"(motion gating 0.2 m / 0.2 rad), {args.repeats} runs, medians")
         print(f"  all scans/s          {on['all_scans_per_s']:8.0f}   (x{on['all_scans_per_s'] / 10:.0f} real time;"
               f" slam_toolbox claim 5x = {SLAM_TOOLBOX_SCANS_PER_S:.0f}/s)")
-        print(f"  integrated scans/s   {on['integrated_scans_per_s']:8.0f}   (1 / mean cost of a scan that passes gating, incl. loop closure + re-render;"
+        print(f"  integrated scans/s   {on['integrated_scans_per_s']:8.0f}   (1 / mean cost of a scan passing gating,"
+              " incl. loop closure + re-render;"
               f" per integrated scan {on['integrated_scan_ms_median']:.1f} ms, per gated scan"
               f" {on['gated_scan_ms_median']:.2f} ms)")
         print(f"  integrated scans/s (CPU time) {on['integrated_scans_per_cpu_s']:5.0f} mean,"
               f" {1e3 / on['integrated_scan_cpu_ms_median']:5.0f} median   (per-scan CPU median "
               f"{on['integrated_scan_cpu_ms_median']:.1f} ms)")
-        print(f"  ATE RMSE (start frame) LC on {on['ate_rmse_m'] * 100:5.2f} cm | LC off {off['ate_rmse_m'] * 100:5.2f} cm"
+        print(f"  ATE RMSE (start frame) LC on {on['ate_rmse_m'] * 100:5.2f} cm"
+              f" | LC off {off['ate_rmse_m'] * 100:5.2f} cm"
               f" | odometry {on['odometry_ate_rmse_m'] * 100:6.1f} cm  (aligned, LC on: "
               f"{on['ate_rmse_aligned_m'] * 100:.2f} cm)")
         print(f"  map IoU (observed walls, 1-cell tol.) LC on {on['map_iou_observed']:.3f} | LC off "

@@ -7,21 +7,19 @@ message starts with the field path, e.g. ``rates.scan_rate_hz: must be > 0``.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from hal_panda_mobile.sim import (
-    LidarNoise,
-    OdomNoise,
-    PandaMobileSim,
-    RobotDescription,
-    SimConfigError,
+from hal_panda_mobile.files import (
     available_scenes,
+    core_field,
+    format_validation_error,
     load_robot_description,
     load_scene,
 )
-from hal_panda_mobile.sim.errors import format_validation_error
+from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim, RobotDescription, SimConfigError, SimParams
 from robonix_api.config_types import FiniteFloat, TopicName
 from robonix_api.validation import finite
 
@@ -44,7 +42,7 @@ class Rates(_Model):
     """Publishing rates in sim-time Hz; scan None means "from the robot description" (10 Hz)."""
 
     physics_rate_hz: float = Field(500.0, ge=500.0, le=10000.0)  # the core steps at >= 500 Hz
-    odom_rate_hz: float = Field(50.0, gt=0, le=1000.0)
+    odom_rate_hz: float = core_field(SimParams, "odom_rate_hz")
     scan_rate_hz: float | None = Field(None, gt=0, le=100.0)
     clock_rate_hz: float = Field(100.0, gt=0, le=1000.0)
     ground_truth_rate_hz: float = Field(10.0, gt=0, le=1000.0)  # evaluation stream; the RPC gives any instant
@@ -70,7 +68,7 @@ class Frames(_Model):
 class HalConfig(_Model):
     scene: Annotated[str, Field(max_length=4096)] | dict[str, Any] = "apartment"
     start: StartPose | None = None
-    seed: int = Field(0, ge=0, le=2**63 - 1)
+    seed: int = core_field(SimParams, "seed")
     robot: str | None = Field(None, max_length=4096)  # robot description YAML; default config/panda_mobile.yaml
     odom_noise: OdomNoise = OdomNoise()  # also "none" or "realistic" (OdomNoise.realistic())
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
@@ -81,7 +79,7 @@ class HalConfig(_Model):
     use_sim_time: bool = True
     publish_clock: bool = True
     publish_ground_truth: bool = True
-    odom_frame_at_start: bool = False  # True: odom starts at (0, 0, 0) instead of coinciding with world
+    odom_frame_at_start: bool = core_field(SimParams, "odom_frame_at_start")
 
     @field_validator("odom_noise", mode="before")
     @classmethod
@@ -124,7 +122,7 @@ def build_sim(cfg: HalConfig) -> PandaMobileSim:
     """The simulator for a validated config (scene, start, noise, rates); SimConfigError names the field."""
     robot = load_robot_description(cfg.robot)
     if cfg.rates.scan_rate_hz is not None:
-        robot = robot.model_copy(update={"lidar": robot.lidar.model_copy(update={"rate_hz": cfg.rates.scan_rate_hz})})
+        robot = dataclasses.replace(robot, lidar=dataclasses.replace(robot.lidar, rate_hz=cfg.rates.scan_rate_hz))
     scene = _scene(cfg, robot)
     return PandaMobileSim(robot, scene, seed=cfg.seed, odom_noise=cfg.noise(), lidar_noise=cfg.lidar_noise,
                           timestep=1.0 / cfg.rates.physics_rate_hz, odom_rate_hz=cfg.rates.odom_rate_hz,

@@ -102,7 +102,7 @@ class SimHandlers:
             spawned = [o["name"] for o in sim.scene_info()["obstacles"] if str(o["ref"]).startswith("spawned")]
             for name in spawned:
                 sim.remove_box(name)
-            sim.teleport(*sim.scene.start.as_tuple())
+            sim.teleport(*sim.scene.start)
             s.cleared_at = sim.time
             return len(spawned)
 
@@ -127,7 +127,8 @@ class SimHandlers:
             require_range(req, name, 0.0, MAX_BOX_SIZE_M, " m")
         require_len(req, "name", ID_MAX)
         if any(not (c.isprintable() and not c.isspace()) for c in req.name.strip()):
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"name: {clip(req.name)} has spaces or control characters")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                              f"name: {clip(req.name)} has spaces or control characters")
         s = self._live()
         self._check_position(s, req, "yaw")
         name = req.name.strip() or f"obstacle_{s.spawn_count}"

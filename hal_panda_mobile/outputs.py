@@ -6,6 +6,7 @@ same publishers without an atlas. Messages are ROS 2 types from ``robonix_api.dd
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,10 +98,8 @@ class Outputs:
     def close(self) -> None:
         for item in (self._clock, self._tf, self._static, self._odom, self._scan, self._gt):
             if item is not None:
-                try:
+                with contextlib.suppress(Exception):  # closing must never stop the teardown of the rest
                     item.close()
-                except Exception:  # closing must never stop the teardown of the rest
-                    pass
 
 
 __all__ = ["FrameNames", "Outputs", "Snapshot"]

@@ -97,7 +97,7 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
         self.own(prim.create_subscription(TWIST_IN, topic=self._topic(TWIST_IN, cfg), msg_type=Twist,
                                           callback=on_twist, qos="reliable"))
         loop.start()
-        log.info("initialized: scene %s, start %s, rtf %s", sim.scene.name, sim.scene.start.as_tuple(),
+        log.info("initialized: scene %s, start %s, rtf %s", sim.scene.name, sim.scene.start,
                  cfg.real_time_factor or "max")
         return loop
 

@@ -19,23 +19,22 @@ from typing import Any
 
 import numpy as np
 
-from nav2_wrapper.core import LaserScan as CoreScan
+from nav2_wrapper.core import RangeScan
 from robonix_api.dds import LaserScan, OccupancyGrid, Odometry, SimClock, TfBuffer, TfError
 from robonix_api.dds.convert import msg_to_grid
-from robonix_common.geometry import compose
+from robonix_common.geometry import Pose2D, compose
 from robonix_common.grid import GridMap
 
 from .config import Frames
 from .upstream import Binding
 
 log = logging.getLogger("nav2_wrapper.inputs")
-Pose = tuple[float, float, float]
 
 
 @dataclass
 class RobotState:
-    pose: Pose                  # base in the map frame
-    vel: Pose                   # body-frame twist from odometry
+    pose: Pose2D                  # base in the map frame
+    vel: tuple[float, float, float]  # body-frame twist from odometry
     tf_age: float               # s (clock time) since the latest odom→base (must be fresh)
     map_tf_age: float = 0.0     # s since the latest map→odom (a slow SLAM correction; may lag)
 
@@ -48,7 +47,7 @@ class Inputs:
         self._lock = threading.Lock()
         self.grid: GridMap | None = None
         self.grid_seq = 0
-        self.odom_vel: Pose = (0.0, 0.0, 0.0)
+        self.odom_vel: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self.odom_t: float | None = None   # clock time of the last odometry
         self.scan: LaserScan | None = None
         self.scan_seq = 0
@@ -153,7 +152,7 @@ class Inputs:
             vel = self.odom_vel
         return RobotState((float(pose[0]), float(pose[1]), float(pose[2])), vel, age(o_b), age(m_o))
 
-    def pose_at(self, stamp: float, fallback: Pose) -> Pose:
+    def pose_at(self, stamp: float, fallback: Pose2D) -> Pose2D:
         """Base pose in map when a sensor sample was taken: map→odom (latest; slow) ∘ odom→base at ``stamp``.
 
         Placing a scan at the *current* pose instead smears its returns by the motion since it was taken
@@ -170,7 +169,7 @@ class Inputs:
         p = compose(m_o.to_pose2d(), o_b.to_pose2d())
         return (float(p[0]), float(p[1]), float(p[2]))
 
-    def core_scan(self, msg: LaserScan, robot: Pose) -> tuple[CoreScan, Pose] | None:
+    def core_scan(self, msg: LaserScan, robot: Pose2D) -> tuple[RangeScan, Pose2D] | None:
         """The scan for the costmaps and the laser's pose in map at the scan's stamp (base ∘ base→laser)."""
         frame = msg.header.frame_id.lstrip("/") or self.frames.base
         try:
@@ -179,7 +178,7 @@ class Inputs:
             log.debug("no TF %s -> %s for the scan: %s", self.frames.base, frame, exc)
             return None
         sp = compose(self.pose_at(msg.header.stamp.to_sec(), robot), mount)
-        scan = CoreScan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
+        scan = RangeScan(np.asarray(msg.ranges, dtype=np.float64), float(msg.angle_min), float(msg.angle_increment),
                         float(msg.range_min), float(msg.range_max))
         return scan, (float(sp[0]), float(sp[1]), float(sp[2]))
 
@@ -209,25 +208,36 @@ class Inputs:
         for writers' leases, which ran out in our frozen process). A source is named by provider id
         (e.g. ``mapping``).
         """
-        f = self.frames
-        req: dict[str, list[str]] = {}
-        opt: dict[str, list[str]] = {}
         with self._lock:
             term = dict(self._terminated)
-        # map→odom (the map provider's TF) -----------------------------------------------------------
-        why = []
-        if "map" in term:
-            why.append(term["map"])
+        req: dict[str, list[str]] = {}
+        opt: dict[str, list[str]] = {}
+        for role, why in (("map", self._map_lost(term, state, map_tf_timeout_s, stale_checks, liveliness_checks)),
+                          ("odom", self._odom_lost(term, now, state, data_timeout_s, stale_checks,
+                                                   liveliness_checks))):
+            if why:
+                req.setdefault(self.source_name(role), []).extend(why)
+        why = self._scan_lost(term, liveliness_checks)
+        if why:
+            opt.setdefault(self.source_name("scan"), []).extend(why)
+        return ({k: "; ".join(v) for k, v in req.items()}, {k: "; ".join(v) for k, v in opt.items()})
+
+    def _map_lost(self, term: dict[str, str], state: RobotState | None, map_tf_timeout_s: float,
+                  stale_checks: bool, liveliness_checks: bool) -> list[str]:
+        """Why map→odom (the map provider's TF) counts as lost; empty when it does not."""
+        f = self.frames
+        why = [term["map"]] if "map" in term else []
         if liveliness_checks and self.tf.link_lost(f.odom):
             why.append(f"TF {f.map}→{f.odom} stopped (DDS liveliness lost)")
         elif stale_checks and state is not None and state.map_tf_age > map_tf_timeout_s:
             why.append(f"TF {f.map}→{f.odom} is stale ({state.map_tf_age:.1f} s old)")
-        if why:
-            req.setdefault(self.source_name("map"), []).extend(why)
-        # odom (the chassis: /odom and TF odom→base) -------------------------------------------------
-        why = []
-        if "odom" in term:
-            why.append(term["odom"])
+        return why
+
+    def _odom_lost(self, term: dict[str, str], now: float, state: RobotState | None, data_timeout_s: float,
+                   stale_checks: bool, liveliness_checks: bool) -> list[str]:
+        """Why odometry (the chassis: its topic and TF odom→base) counts as lost; empty when it does not."""
+        f = self.frames
+        why = [term["odom"]] if "odom" in term else []
         odom_topic = self.bindings["odom"].topic
         if liveliness_checks and self.writer_lost("odom"):
             why.append(f"{odom_topic} stopped (DDS liveliness lost)")
@@ -240,18 +250,16 @@ class Inputs:
                            else f"no odometry on {odom_topic}")
             elif state is not None and state.tf_age > data_timeout_s:
                 why.append(f"TF {f.odom}→{f.base} is stale ({state.tf_age:.1f} s old)")
-        if why:
-            req.setdefault(self.source_name("odom"), []).extend(why)
-        # scan (optional: the obstacle layer) --------------------------------------------------------
-        if "scan" in self.bindings:
-            why = []
-            if "scan" in term:
-                why.append(term["scan"])
-            if liveliness_checks and self.writer_lost("scan"):
-                why.append(f"{self.bindings['scan'].topic} stopped (DDS liveliness lost)")
-            if why:
-                opt.setdefault(self.source_name("scan"), []).extend(why)
-        return ({k: "; ".join(v) for k, v in req.items()}, {k: "; ".join(v) for k, v in opt.items()})
+        return why
+
+    def _scan_lost(self, term: dict[str, str], liveliness_checks: bool) -> list[str]:
+        """Why the (optional) scan counts as lost; empty when it does not or there is no scan binding."""
+        if "scan" not in self.bindings:
+            return []
+        why = [term["scan"]] if "scan" in term else []
+        if liveliness_checks and self.writer_lost("scan"):
+            why.append(f"{self.bindings['scan'].topic} stopped (DDS liveliness lost)")
+        return why
 
     def close(self) -> None:
         for s in self._subs.values():

@@ -14,6 +14,7 @@ the run after ``clock_timeout_s``.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import threading
@@ -33,7 +34,7 @@ from nav2_wrapper.core.warmup import ready as kernels_ready
 from nav2_wrapper.core.warmup import wait_finished as kernels_wait
 from robonix_api.dds import FrameNotFoundError, Path, TfError, Twist
 from robonix_api.dds.convert import header, pose_stamped, twist
-from robonix_common.geometry import compose
+from robonix_common.geometry import Pose2D, compose
 
 from .config import ProviderConfig
 from .goals import PlanarGoal
@@ -227,14 +228,14 @@ class NavLoop:
             self.nav.set_speed_limit(self.speed.mps(self.speed.effective()[0]), percentage=False)
 
     # ---- helpers -----------------------------------------------------------------------------------
-    def _reject(self, rid: str, goal: tuple[float, float, float], reason: str, now: float) -> GoalRecord:
+    def _reject(self, rid: str, goal: Pose2D, reason: str, now: float) -> GoalRecord:
         rec = GoalRecord(rid, goal, state=FAILED, detail=f"rejected: {reason}", accepted=False, started=now,
                          finished=now)
         self.nav.records[rid] = rec
         self.nav.latest = rec
         return rec
 
-    def _to_map(self, g: PlanarGoal) -> tuple[float, float, float] | str:
+    def _to_map(self, g: PlanarGoal) -> Pose2D | str:
         mf = self.cfg.frames.map
         if g.frame in ("", mf):
             return g.x, g.y, g.yaw
@@ -265,10 +266,8 @@ class NavLoop:
         log.info("run %s %s: %s", rec.run_id, rec.state, reason)
 
     def publish_zero(self) -> None:
-        try:
+        with contextlib.suppress(RuntimeError):  # closed during teardown
             self.pubs.cmd_vel.publish(twist(0.0, 0.0, 0.0))
-        except RuntimeError:  # closed during teardown
-            pass
         self._moving = False
 
     # ---- the loop ----------------------------------------------------------------------------------

@@ -1,216 +1,57 @@
 """Nav2-shaped params profiles → the core's dataclass configs.
 
-Loads ``config/nav2_params_<profile>.yml`` (or any path), fills the ``__ROBONIX_*__`` tokens, validates
-every section with pydantic, and warns — naming the full parameter path — about anything no active
-plugin reads (Nav2 silently ignores parameters under an unselected plugin; we do not). An unfilled
-token is an error naming the token.
+Loads ``config/nav2_params_<profile>.yml`` (or any path), fills the ``__ROBONIX_*__`` tokens, and validates
+every section against its table in ``params_schema`` (types and ranges come from the core fields'
+declarations; an error names the full parameter path). Builds the core configs from the same tables.
+Warns — naming the full parameter path — about every key no active plugin reads (unknown keys, and
+sections of unselected plugins: Nav2 silently ignores those; we do not) and lists the keys accepted only
+for Nav2 compatibility. An unfilled token is an error naming the token.
 """
 
 from __future__ import annotations
 
 import re
+import types
+import typing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from robonix_nav_data import resources
 
+from . import params_schema as ps
 from .core.checkers import GoalCheckerConfig, ProgressCheckerConfig
 from .core.controller import ControllerConfig
 from .core.costmap import CostmapConfig, ObservationSource
 from .core.footprint import Footprint
+from .core.mppi import MppiConfig
 from .core.navigator import NavConfig, NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
+from .robot_io import RobotLimits, load_footprint
 
 CONFIG_DIR = resources.config_dir()
 PROFILES = ("sim", "slam", "default")
 TOKENS = ("__ROBONIX_MAP_TOPIC__", "__ROBONIX_ODOM_TOPIC__", "__ROBONIX_SCAN_TOPIC__", "__ROBONIX_FOOTPRINT__")
 _TOKEN_RE = re.compile(r"__ROBONIX_[A-Z0-9_]+__")
+NODES = ("bt_navigator", "planner_server", "controller_server", "global_costmap", "local_costmap", "behavior_server")
 
-PLANNER_PLUGINS = {"robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
-                   "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner"}
-CONTROLLER_PLUGINS = {"robonix_nav::HolonomicPursuitController"}
-GOAL_CHECKERS = {"nav2_controller::SimpleGoalChecker", "nav2_controller::StoppedGoalChecker"}
-PROGRESS_CHECKERS = {"nav2_controller::SimpleProgressChecker"}
-BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait"}
-LAYERS = {"nav2_costmap_2d::StaticLayer": "static", "nav2_costmap_2d::ObstacleLayer": "obstacle",
-          "nav2_costmap_2d::InflationLayer": "inflation"}
+#: Values for core config fields, per config class, as the sections are read.
+Fields = dict[type, dict[str, Any]]
 
 
 class ParamsError(ValueError):
     """A params file is unusable; the message names the file, token or parameter path."""
 
 
-class _P(BaseModel):
-    model_config = ConfigDict(extra="allow")
-
-
-class _Node(_P):
-    use_sim_time: bool = False
-
-
-class BtNavigatorParams(_Node):
-    global_frame: str = "map"
-    robot_base_frame: str = "base_link"
-    odom_topic: str = "/odom"
-    replan_frequency: float = Field(1.0, gt=0)
-    path_blocked_lookahead: float = Field(2.5, gt=0)
-    blocked_timeout: float = Field(2.0, gt=0)
-    pending_timeout: float = Field(30.0, gt=0)
-    # s a goal stays paused (robot stopped, RUNNING "waiting for <input>") while a required input is lost
-    input_grace_s: float = Field(5.0, ge=0, le=3600)
-    number_of_retries: int = Field(6, ge=0)
-    recovery_behaviors: list[Literal["clear_costmaps", "spin", "wait", "backup"]] = \
-        ["clear_costmaps", "spin", "wait", "backup"]
-    spin_dist: float = Field(1.57, gt=0)
-    wait_duration: float = Field(5.0, ge=0)
-    backup_dist: float = Field(0.30, gt=0)
-    backup_speed: float = Field(0.05, gt=0)
-
-
-class PlannerServerParams(_Node):
-    expected_planner_frequency: float = Field(20.0, gt=0)
-    planner_plugins: list[str] = ["GridBased"]
-
-
-class PlannerPluginParams(_P):
-    plugin: str
-    tolerance: float = Field(0.5, ge=0)
-    allow_unknown: bool = True
-    cost_travel_multiplier: float = Field(2.0, ge=0)
-    unknown_cost: int = Field(200, ge=0, le=252)
-    smooth_path: bool = True
-    heuristic_weight: float = Field(1.25, ge=1.0)
-    escape_radius: float = Field(0.35, ge=0)
-
-
-class ControllerServerParams(_Node):
-    controller_frequency: float = Field(20.0, gt=0)
-    controller_plugins: list[str] = ["FollowPath"]
-    goal_checker_plugins: list[str] = ["general_goal_checker"]
-    progress_checker_plugins: list[str] = ["progress_checker"]
-
-
-class GoalCheckerParams(_P):
-    plugin: str
-    xy_goal_tolerance: float = Field(0.25, gt=0)
-    yaw_goal_tolerance: float = Field(0.25, gt=0)
-    stateful: bool = True
-    trans_stopped_velocity: float = Field(0.25, gt=0)   # StoppedGoalChecker only (Nav2 defaults)
-    rot_stopped_velocity: float = Field(0.25, gt=0)
-
-
-class ProgressCheckerParams(_P):
-    plugin: str
-    required_movement_radius: float = Field(0.5, gt=0)
-    movement_time_allowance: float = Field(10.0, gt=0)
-
-
-class ControllerPluginParams(_P):
-    plugin: str
-    max_vel_x: float = Field(0.5, gt=0)
-    max_vel_y: float = Field(0.5, ge=0)
-    max_vel_theta: float = Field(1.9, gt=0)
-    acc_lim_x: float = Field(1.5, gt=0)
-    acc_lim_y: float = Field(1.5, gt=0)
-    acc_lim_theta: float = Field(3.0, gt=0)
-    desired_linear_vel: float = Field(0.5, gt=0)
-    lookahead_dist: float = Field(0.6, gt=0)
-    min_lookahead_dist: float = Field(0.3, gt=0)
-    max_lookahead_dist: float = Field(0.9, gt=0)
-    lookahead_time: float = Field(1.5, gt=0)
-    use_velocity_scaled_lookahead_dist: bool = True
-    approach_velocity_scaling_dist: float = Field(0.6, gt=0)
-    min_approach_linear_velocity: float = Field(0.05, ge=0)
-    use_cost_regulated_linear_velocity_scaling: bool = True
-    cost_scaling_dist: float = Field(0.6, gt=0)
-    cost_scaling_gain: float = Field(1.0, gt=0)
-    regulated_linear_scaling_min_speed: float = Field(0.15, ge=0)
-    rotation_gain: float = Field(2.5, gt=0)
-    allow_reversed_heading: bool = True
-    rotate_to_goal_dist: float = Field(0.5, ge=0)
-    collision_check_time: float = Field(1.0, gt=0)
-    tight_clearance: float = Field(0.15, ge=0)      # m beyond the circumscribed radius = narrow passage
-    passage_lookahead: float = Field(1.0, ge=0)     # m of path searched for a narrow passage
-
-
-class CostmapParams(_Node):
-    global_frame: str = "map"
-    robot_base_frame: str = "base_link"
-    update_frequency: float = Field(5.0, gt=0)
-    publish_frequency: float = Field(1.0, gt=0)
-    rolling_window: bool = False
-    width: float = Field(5.0, gt=0)
-    height: float = Field(5.0, gt=0)
-    resolution: float = Field(0.05, gt=0)
-    origin_x: float = 0.0
-    origin_y: float = 0.0
-    track_unknown_space: bool = False
-    lethal_cost_threshold: int = Field(100, ge=1, le=100)
-    unknown_cost_value: int = -1
-    trinary_costmap: bool = True
-    footprint: str = "[]"
-    footprint_padding: float = Field(0.0, ge=0)
-    plugins: list[str] = []
-
-
-class StaticLayerParams(_P):
-    plugin: str
-    enabled: bool = True
-    map_topic: str = "/map"
-    map_subscribe_transient_local: bool = True
-
-
-class ObstacleLayerParams(_P):
-    plugin: str
-    enabled: bool = True
-    observation_sources: str = ""
-
-
-class ObservationParams(_P):
-    topic: str | None = None             # empty (no lidar on this deploy) disables the source
-    data_type: Literal["LaserScan"] = "LaserScan"
-    marking: bool = True
-    clearing: bool = True
-    obstacle_max_range: float = Field(2.5, gt=0)
-    obstacle_min_range: float = Field(0.0, ge=0)
-    raytrace_max_range: float = Field(3.0, gt=0)
-    raytrace_min_range: float = Field(0.0, ge=0)
-    inf_is_valid: bool = False
-    max_obstacle_height: float = 2.0    # read for Nav2 compatibility; a 2-D scan has no height
-
-
-class InflationLayerParams(_P):
-    plugin: str
-    enabled: bool = True
-    inflation_radius: float = Field(0.55, gt=0)
-    cost_scaling_factor: float = Field(10.0, gt=0)
-    inflate_unknown: bool = False
-
-
-class BehaviorServerParams(_Node):
-    behavior_plugins: list[str] = ["spin", "backup", "wait"]
-    cycle_frequency: float = Field(10.0, gt=0)
-    simulate_ahead_time: float = Field(2.0, gt=0)
-    max_rotational_vel: float = Field(1.0, gt=0)
-    min_rotational_vel: float = Field(0.4, gt=0)
-    rotational_acc_lim: float = Field(3.2, gt=0)
-    time_allowance: float = Field(10.0, gt=0)
-
-
-class BehaviorPluginParams(_P):
-    plugin: str
-
-
 @dataclass
 class LoadedParams:
     config: NavConfig
     topics: dict[str, str]                      # map, odom, scan (empty when no scan source is active)
-    warnings: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)   # keys nothing reads: unknown, or unselected plugin
+    unused: list[str] = field(default_factory=list)     # keys set but accepted only for Nav2 compatibility
     source: str = ""
 
 
@@ -231,27 +72,66 @@ def profile_path(profile: str) -> Path:
     return CONFIG_DIR / f"nav2_params_{profile}.yml"
 
 
+def _coerce(value: Any, tp: Any) -> Any:
+    """``value`` as YAML gives it, checked against (and converted to) the declared type ``tp``."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        return None if value is None else _coerce(value, args[0])
+    if origin in (list, tuple):
+        if not isinstance(value, list):
+            raise ValueError(f"must be a list, got {value!r}")
+        items = [_coerce(v, typing.get_args(tp)[0]) for v in value]
+        return tuple(items) if origin is tuple else items
+    if tp is bool and isinstance(value, bool):
+        return value
+    if tp is int and isinstance(value, (int, float)) and not isinstance(value, bool) and float(value).is_integer():
+        return int(value)
+    if tp is float and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    if tp is str and isinstance(value, str):
+        return value
+    want = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}.get(tp, str(tp))
+    raise ValueError(f"must be {want}, got {value!r}")
+
+
 class _Reader:
-    """Validates sections and collects the warnings for parameters nobody reads."""
+    """Validates sections against their tables and collects what nobody reads."""
 
     def __init__(self, raw: dict[str, Any], where: str) -> None:
-        self.raw, self.where, self.warnings = raw, where, []
+        self.raw, self.where = raw, where
+        self.warnings: list[str] = []
+        self.unused: list[str] = []
 
-    def model(self, cls: type[_P], data: Any, path: str) -> Any:
+    def fail(self, path: str, why: str) -> ParamsError:
+        return ParamsError(f"{self.where}: {path}: {why}")
+
+    def read(self, sec: ps.Section, data: Any, path: str, into: Fields | None = None) -> dict[str, Any]:
+        """Every key of ``sec`` (given or default) by YAML name; core keys also go to ``into``."""
         if data is None:
             data = {}
         if not isinstance(data, dict):
-            raise ParamsError(f"{self.where}: {path} must be a mapping, got {type(data).__name__}")
-        try:
-            m = cls.model_validate(data)
-        except ValidationError as exc:
-            err = exc.errors()[0]
-            loc = ".".join(str(p) for p in err["loc"])
-            raise ParamsError(f"{self.where}: {path}.{loc}: {err['msg']}") from exc
-        for k in sorted(m.model_extra or {}):
-            if not isinstance(data[k], dict):
-                self.warn(f"{path}.{k}", "is not read by any active plugin")
-        return m
+            raise self.fail(path, f"must be a mapping, got {type(data).__name__}")
+        out: dict[str, Any] = {}
+        for key in sec.keys:
+            value = key.default.copy() if isinstance(key.default, list) else key.default
+            if key.name in data:
+                try:
+                    value = _coerce(data[key.name], key.type)
+                except ValueError as exc:
+                    raise self.fail(f"{path}.{key.name}", str(exc)) from None
+                why = key.spec.violation(value)
+                if why:
+                    raise self.fail(f"{path}.{key.name}", why)
+                if key.compat:
+                    self.unused.append(f"{path}.{key.name}")
+            out[key.name] = value
+            if key.target is not None and into is not None:
+                into.setdefault(key.target, {})[key.field] = value
+        for k in sorted(set(data) - set(out)):
+            if not (sec.nested and isinstance(data[k], dict)):   # sub-sections are checked by their reader
+                self.warn_subtree(f"{path}.{k}", data[k], f"is not a parameter of {sec.title} (ignored)")
+        return out
 
     def warn(self, path: str, why: str) -> None:
         self.warnings.append(f"parameter '{path}' {why}")
@@ -270,20 +150,21 @@ class _Reader:
         params = d.get("ros__parameters", {}) if isinstance(d, dict) else {}
         return (params or {}), ".".join([*keys, "ros__parameters"])
 
-    def plugins(self, params: dict[str, Any], path: str, names: list[str], cls: type[_P] | None,
-                allowed: set[str] | dict,
-                kind: str) -> list[tuple[str, Any]]:
-        """Validate the selected plugin sections; warn about sub-sections of unselected ones."""
-        out = []
-        for name in names:
-            sec = params.get(name)
-            if not isinstance(sec, dict) or "plugin" not in sec:
-                raise ParamsError(f"{self.where}: {path}.{name}: selected {kind} has no section with a 'plugin'")
-            if sec["plugin"] not in allowed:
-                raise ParamsError(f"{self.where}: {path}.{name}.plugin: {kind} {sec['plugin']!r} is not supported "
-                                  f"(supported: {', '.join(sorted(allowed))})")
-            out.append((name, sec if cls is None else self.model(cls, sec, f"{path}.{name}")))
-        return out
+    def plugin(self, params: dict[str, Any], path: str, name: str, sections: dict[str, ps.Section],
+               kind: str) -> tuple[dict[str, Any], ps.Section]:
+        """The selected plugin section ``name``: its raw mapping and the table its plugin type uses."""
+        sec = params.get(name)
+        if not isinstance(sec, dict) or "plugin" not in sec:
+            raise self.fail(f"{path}.{name}", f"selected {kind} has no section with a 'plugin'")
+        if sec["plugin"] not in sections:
+            raise self.fail(f"{path}.{name}.plugin", f"{kind} {sec['plugin']!r} is not supported "
+                                                     f"(supported: {', '.join(sorted(sections))})")
+        return sec, sections[sec["plugin"]]
+
+    def only(self, names: list[str], path: str) -> str:
+        if len(names) != 1:
+            raise self.fail(path, "exactly one entry is supported")
+        return names[0]
 
     def unselected(self, params: dict[str, Any], path: str, selected: set[str]) -> None:
         for k, v in params.items():
@@ -291,162 +172,203 @@ class _Reader:
                 self.warn_subtree(f"{path}.{k}", v, "is under an unselected plugin and is not read")
 
 
-def _footprint(text: str, padding: float, fallback: Footprint, where: str) -> Footprint:
+def _plugins_for(sec: ps.Section) -> dict[str, ps.Section]:
+    return dict.fromkeys(sec.plugins, sec)
+
+
+def _footprint(text: str, padding: float, fallback: Footprint, rd: _Reader, path: str) -> Footprint:
     if text.strip() in ("", "[]"):
         fp = fallback
     else:
         try:
             fp = Footprint.from_string(text)
         except ValueError as exc:
-            raise ParamsError(f"{where}: {exc}") from exc
+            raise rd.fail(path, str(exc)) from exc
     if padding > 0:
         poly = fp.polygon + padding * (fp.polygon > 0) - padding * (fp.polygon < 0)
         fp = Footprint(poly)
     return fp
 
 
+def _observation_sources(rd: _Reader, sec: dict[str, Any], lpath: str, names: list[str],
+                         topics: dict[str, str]) -> list[ObservationSource]:
+    out = []
+    for src in names:
+        into: Fields = {}
+        v = rd.read(ps.OBSERVATION_SOURCE, sec.get(src), f"{lpath}.{src}", into)
+        if not v["topic"]:
+            rd.warn(f"{lpath}.{src}.topic", "is empty (no lidar on this deploy): source disabled")
+            continue
+        topics.setdefault("scan", v["topic"])
+        out.append(ObservationSource(src, v["topic"], **into.get(ObservationSource, {})))
+    rd.unselected(sec, lpath, set(names))
+    return out
+
+
+def _layers(rd: _Reader, raw: dict[str, Any], path: str, names: list[str], fields: dict[str, Any],
+            topics: dict[str, str]) -> list[ObservationSource]:
+    """Read the selected layer sections into ``fields`` (CostmapConfig's); returns the active scan sources."""
+    fields.update(static_layer=False, obstacle_layer=False, inflation_layer=False)
+    seen: set[str] = set()
+    sources: list[ObservationSource] = []
+    for lname in names:
+        sec, table = rd.plugin(raw, path, lname, ps.LAYERS, "costmap layer")
+        lpath = f"{path}.{lname}"
+        if table.title in seen:
+            raise rd.fail(lpath, f"a second {sec['plugin']} is not supported")
+        seen.add(table.title)
+        into: Fields = {}
+        v = rd.read(table, sec, lpath, into)
+        fields.update(into.get(CostmapConfig, {}))
+        if table is ps.STATIC_LAYER:
+            topics["map"] = v["map_topic"]
+        elif table is ps.OBSTACLE_LAYER:
+            sources = _observation_sources(rd, sec, lpath, v["observation_sources"].split(), topics)
+            fields["obstacle_layer"] = v["enabled"] and bool(sources)
+    if not fields["inflation_layer"]:
+        fields["inflation_radius"] = 0.0
+    return sources
+
+
 def _costmap(rd: _Reader, name: str, fallback_fp: Footprint, topics: dict[str, str]) -> CostmapConfig:
     raw, path = rd.node(name, name)
-    p = rd.model(CostmapParams, raw, path)
-    fp = _footprint(p.footprint, p.footprint_padding, fallback_fp, f"{rd.where}: {path}.footprint")
-    cfg = CostmapConfig(name=name, resolution=p.resolution, rolling_window=p.rolling_window, width=p.width,
-                        height=p.height, origin_x=p.origin_x, origin_y=p.origin_y, static_layer=False,
-                        obstacle_layer=False, inflation_layer=False, track_unknown_space=p.track_unknown_space,
-                        lethal_cost_threshold=p.lethal_cost_threshold, unknown_cost_value=p.unknown_cost_value,
-                        trinary_costmap=p.trinary_costmap, footprint=fp, observation_sources=[])
-    layers = rd.plugins(raw, path, p.plugins, None, LAYERS, "costmap layer")
-    seen: set[str] = set()
-    for lname, _ in layers:
-        sec = raw[lname]
-        kind = LAYERS[sec["plugin"]]
-        lpath = f"{path}.{lname}"
-        if kind in seen:
-            raise ParamsError(f"{rd.where}: {lpath}: a second {sec['plugin']} is not supported")
-        seen.add(kind)
-        if kind == "static":
-            sp = rd.model(StaticLayerParams, sec, lpath)
-            cfg.static_layer = sp.enabled
-            topics["map"] = sp.map_topic
-        elif kind == "inflation":
-            ip = rd.model(InflationLayerParams, sec, lpath)
-            cfg.inflation_layer = ip.enabled
-            cfg.inflation_radius, cfg.cost_scaling_factor = ip.inflation_radius, ip.cost_scaling_factor
-            cfg.inflate_unknown = ip.inflate_unknown
-        else:
-            op = rd.model(ObstacleLayerParams, sec, lpath)
-            names = op.observation_sources.split()
-            for src in names:
-                o = rd.model(ObservationParams, sec.get(src), f"{lpath}.{src}")
-                if not o.topic:
-                    rd.warn(f"{lpath}.{src}.topic", "is empty (no lidar on this deploy): source disabled")
-                    continue
-                topics.setdefault("scan", o.topic)
-                cfg.observation_sources.append(ObservationSource(
-                    src, o.topic, o.marking, o.clearing, o.obstacle_max_range, o.obstacle_min_range,
-                    o.raytrace_max_range, o.raytrace_min_range, o.inf_is_valid))
-            rd.unselected(sec, lpath, set(names))
-            cfg.obstacle_layer = op.enabled and bool(cfg.observation_sources)
-    rd.unselected(raw, path, set(p.plugins))
-    if not cfg.inflation_layer:
-        cfg.inflation_radius = 0.0
-    return cfg
+    into: Fields = {}
+    v = rd.read(ps.COSTMAP, raw, path, into)
+    fp = _footprint(v["footprint"], v["footprint_padding"], fallback_fp, rd, f"{path}.footprint")
+    fields = into.get(CostmapConfig, {})
+    sources = _layers(rd, raw, path, v["plugins"], fields, topics)
+    rd.unselected(raw, path, set(v["plugins"]))
+    return CostmapConfig(name=name, footprint=fp, observation_sources=sources, **fields)
 
 
-def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str = "/odom",
-                scan_topic: str = "/scan", footprint: Footprint | None = None,
-                text: str | None = None) -> LoadedParams:
-    """Load a profile name (sim|slam|default) or a params file path into the core's NavConfig.
+def _check_limits(rd: _Reader, c: ControllerConfig, limits: RobotLimits, path: str) -> None:
+    """Warn where the controller may command more than the robot description allows."""
+    pairs = (("max_vel_x", "max_vx"), ("max_vel_y", "max_vy"), ("max_vel_theta", "max_wz"),
+             ("acc_lim_x", "max_ax"), ("acc_lim_y", "max_ay"), ("acc_lim_theta", "max_aw"))
+    for mine, robot in pairs:
+        if getattr(c, mine) > getattr(limits, robot) + 1e-9:
+            rd.warn(f"{path}.{mine}", f"= {getattr(c, mine):g} exceeds the robot description's limits.{robot} "
+                                      f"= {getattr(limits, robot):g} (the base clamps it)")
 
-    The tokens take the given topics and the footprint (default: config/panda_mobile.yaml). Raises
-    ParamsError naming the file and the parameter/token; returns warnings for unread parameters.
-    """
+
+def _mppi_critics(rd: _Reader, sec: dict[str, Any], cpath: str, listed: list[str], into: Fields) -> None:
+    """Read the listed critics' sections; a critic not listed (or disabled) has its weight set to 0."""
+    unknown = [c for c in listed if c not in ps.CRITICS]
+    if unknown:
+        raise rd.fail(f"{cpath}.critics", f"unsupported critic(s) {', '.join(unknown)} "
+                                          f"(supported: {', '.join(ps.CRITICS)})")
+    weights = into.setdefault(MppiConfig, {})
+    enabled: set[str] = set()
+    for name in listed:
+        v = rd.read(ps.CRITICS[name], sec.get(name), f"{cpath}.{name}", into)
+        if v["enabled"] and name in ps.CRITIC_WEIGHTS:
+            enabled.add(ps.CRITIC_WEIGHTS[name])
+    for field_name in set(ps.CRITIC_WEIGHTS.values()) - enabled:
+        weights[field_name] = 0.0
+    rd.unselected(sec, cpath, set(listed))
+
+
+def _controller_server(rd: _Reader, into: Fields, footprint: Footprint) -> tuple[ControllerConfig, str]:
+    """The controller, goal checker and progress checker; returns the controller and its section path."""
+    raw, path = rd.node("controller_server")
+    v = rd.read(ps.CONTROLLER_SERVER, raw, path, into)
+    names = {k: rd.only(v[k], f"{path}.{k}")
+             for k in ("controller_plugins", "goal_checker_plugins", "progress_checker_plugins")}
+    controllers = {**_plugins_for(ps.CONTROLLER), **_plugins_for(ps.MPPI_CONTROLLER)}
+    sec, table = rd.plugin(raw, path, names["controller_plugins"], controllers, "controller")
+    cpath = f"{path}.{names['controller_plugins']}"
+    cv = rd.read(table, sec, cpath, into)
+    if table is ps.MPPI_CONTROLLER:
+        _mppi_critics(rd, sec, cpath, cv["critics"], into)
+    sec, table = rd.plugin(raw, path, names["goal_checker_plugins"], ps.GOAL_CHECKERS, "goal checker")
+    rd.read(table, sec, f"{path}.{names['goal_checker_plugins']}", into)
+    into[GoalCheckerConfig]["stopped"] = table is ps.STOPPED_GOAL_CHECKER
+    sec, table = rd.plugin(raw, path, names["progress_checker_plugins"], _plugins_for(ps.PROGRESS_CHECKER),
+                           "progress checker")
+    rd.read(table, sec, f"{path}.{names['progress_checker_plugins']}", into)
+    rd.unselected(raw, path, set(names.values()))
+    return ControllerConfig(footprint=footprint, **into.get(ControllerConfig, {})), \
+        f"{path}.{names['controller_plugins']}"
+
+
+def _planner_server(rd: _Reader, into: Fields) -> None:
+    raw, path = rd.node("planner_server")
+    v = rd.read(ps.PLANNER_SERVER, raw, path, into)
+    name = rd.only(v["planner_plugins"], f"{path}.planner_plugins")
+    sec, table = rd.plugin(raw, path, name, _plugins_for(ps.PLANNER), "planner")
+    rd.read(table, sec, f"{path}.{name}", into)
+    rd.unselected(raw, path, {name})
+
+
+def _behaviors(rd: _Reader, into: Fields, bt_path: str) -> None:
+    raw, path = rd.node("behavior_server")
+    v = rd.read(ps.BEHAVIOR_SERVER, raw, path, into)
+    available = {"clear_costmaps"}
+    for name in v["behavior_plugins"]:
+        sec, table = rd.plugin(raw, path, name, _plugins_for(ps.BEHAVIOR), "behavior")
+        rd.read(table, sec, f"{path}.{name}")
+        available.add(ps.BEHAVIORS[sec["plugin"]])
+    rd.unselected(raw, path, set(v["behavior_plugins"]))
+    for b in into[RecoveryConfig]["behaviors"]:
+        if b not in available:
+            raise rd.fail(f"{bt_path}.recovery_behaviors",
+                          f"{b!r} needs a behavior_server plugin (have {', '.join(sorted(available))})")
+
+
+def _parse(source: str | Path, text: str | None, tokens: dict[str, str]) -> tuple[dict[str, Any], str]:
     path = profile_path(str(source)) if str(source) in PROFILES else Path(source)
     where = str(path)
-    fp = footprint or Footprint.from_robot_yaml()
     if text is None:
         try:
             text = path.read_text()
         except OSError as exc:
             raise ParamsError(f"{where}: cannot read params file: {exc}") from exc
-    text = fill_tokens(text, {"__ROBONIX_MAP_TOPIC__": map_topic, "__ROBONIX_ODOM_TOPIC__": odom_topic,
-                              "__ROBONIX_SCAN_TOPIC__": scan_topic, "__ROBONIX_FOOTPRINT__": fp.to_string()}, where)
+    text = fill_tokens(text, tokens, where)
     try:
         raw = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise ParamsError(f"{where}: invalid YAML: {exc}") from exc
     if not isinstance(raw, dict):
         raise ParamsError(f"{where}: top level must be a mapping of Nav2 node names")
+    return raw, where
+
+
+def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str = "/odom",
+                scan_topic: str = "/scan", footprint: Footprint | None = None, limits: RobotLimits | None = None,
+                text: str | None = None) -> LoadedParams:
+    """Load a profile name (sim|slam|default) or a params file path into the core's NavConfig.
+
+    The tokens take the given topics and the footprint (default: the robot description's). With the
+    robot's ``limits``, a controller limit above them is warned about. Raises ParamsError naming the file
+    and the parameter/token; returns warnings for unread parameters.
+    """
+    fp = footprint or load_footprint()
+    raw, where = _parse(source, text, {"__ROBONIX_MAP_TOPIC__": map_topic, "__ROBONIX_ODOM_TOPIC__": odom_topic,
+                                       "__ROBONIX_SCAN_TOPIC__": scan_topic, "__ROBONIX_FOOTPRINT__": fp.to_string()})
     rd = _Reader(raw, where)
-    known = {"bt_navigator", "planner_server", "controller_server", "global_costmap", "local_costmap",
-             "behavior_server"}
     for k, v in raw.items():
-        if k not in known:
+        if k not in NODES:
             rd.warn_subtree(k, v, "belongs to a node this navigation core does not run")
-    topics: dict[str, str] = {}
-
+    into: Fields = {}
     bt_raw, bt_path = rd.node("bt_navigator")
-    bt = rd.model(BtNavigatorParams, bt_raw, bt_path)
-    topics["odom"] = bt.odom_topic
-
-    pl_raw, pl_path = rd.node("planner_server")
-    ps = rd.model(PlannerServerParams, pl_raw, pl_path)
-    if len(ps.planner_plugins) != 1:
-        raise ParamsError(f"{where}: {pl_path}.planner_plugins: exactly one planner is supported")
-    (_, pp), = rd.plugins(pl_raw, pl_path, ps.planner_plugins, PlannerPluginParams, PLANNER_PLUGINS, "planner")
-    rd.unselected(pl_raw, pl_path, set(ps.planner_plugins))
-
-    c_raw, c_path = rd.node("controller_server")
-    cs = rd.model(ControllerServerParams, c_raw, c_path)
-    for lst, nm in ((cs.controller_plugins, "controller_plugins"), (cs.goal_checker_plugins, "goal_checker_plugins"),
-                    (cs.progress_checker_plugins, "progress_checker_plugins")):
-        if len(lst) != 1:
-            raise ParamsError(f"{where}: {c_path}.{nm}: exactly one entry is supported")
-    (_, cp), = rd.plugins(c_raw, c_path, cs.controller_plugins, ControllerPluginParams, CONTROLLER_PLUGINS,
-                          "controller")
-    (_, gp), = rd.plugins(c_raw, c_path, cs.goal_checker_plugins, GoalCheckerParams, GOAL_CHECKERS, "goal checker")
-    (_, pg), = rd.plugins(c_raw, c_path, cs.progress_checker_plugins, ProgressCheckerParams, PROGRESS_CHECKERS,
-                          "progress checker")
-    rd.unselected(c_raw, c_path, {*cs.controller_plugins, *cs.goal_checker_plugins, *cs.progress_checker_plugins})
-
-    b_raw, b_path = rd.node("behavior_server")
-    bs = rd.model(BehaviorServerParams, b_raw, b_path)
-    beh = rd.plugins(b_raw, b_path, bs.behavior_plugins, BehaviorPluginParams, BEHAVIORS, "behavior")
-    rd.unselected(b_raw, b_path, set(bs.behavior_plugins))
-    available = {"clear_costmaps"} | {BEHAVIORS[m.plugin] for _, m in beh}
-    for b in bt.recovery_behaviors:
-        if b not in available:
-            raise ParamsError(f"{where}: {bt_path}.recovery_behaviors: {b!r} needs a behavior_server plugin "
-                              f"(have {', '.join(sorted(available))})")
-
+    topics = {"odom": rd.read(ps.BT_NAVIGATOR, bt_raw, bt_path, into)["odom_topic"]}
+    _planner_server(rd, into)
+    controller, c_path = _controller_server(rd, into, fp)
+    _behaviors(rd, into, bt_path)
     gcm = _costmap(rd, "global_costmap", fp, topics)
     lcm = _costmap(rd, "local_costmap", fp, topics)
-    ctrl_fields = {k: v for k, v in cp.model_dump().items() if k in ControllerConfig.__dataclass_fields__}
+    if lcm.footprint is not fp:
+        controller.footprint = lcm.footprint
+    if limits is not None:
+        _check_limits(rd, controller, limits, c_path)
     cfg = NavConfig(
-        global_costmap=gcm,
-        local_costmap=lcm,
-        planner=PlannerConfig(tolerance=pp.tolerance, allow_unknown=pp.allow_unknown,
-                              cost_travel_multiplier=pp.cost_travel_multiplier, unknown_cost=pp.unknown_cost,
-                              smooth_path=pp.smooth_path, heuristic_weight=pp.heuristic_weight,
-                              escape_radius=pp.escape_radius),
-        controller=ControllerConfig(**ctrl_fields, footprint=lcm.footprint),
-        goal_checker=GoalCheckerConfig(
-            gp.xy_goal_tolerance, gp.yaw_goal_tolerance, gp.stateful,
-            *((gp.trans_stopped_velocity, gp.rot_stopped_velocity) if gp.plugin.endswith("StoppedGoalChecker")
-              else (None, None))),
-        progress_checker=ProgressCheckerConfig(pg.required_movement_radius, pg.movement_time_allowance),
-        recovery=RecoveryConfig(number_of_retries=bt.number_of_retries, behaviors=tuple(bt.recovery_behaviors),
-                                spin_dist=bt.spin_dist, max_rotational_vel=bs.max_rotational_vel,
-                                min_rotational_vel=bs.min_rotational_vel, rotational_acc_lim=bs.rotational_acc_lim,
-                                wait_duration=bt.wait_duration, backup_dist=bt.backup_dist,
-                                backup_speed=bt.backup_speed, time_allowance=bs.time_allowance,
-                                simulate_ahead_time=bs.simulate_ahead_time),
-        navigator=NavigatorConfig(replan_frequency=bt.replan_frequency, controller_frequency=cs.controller_frequency,
-                                  path_blocked_lookahead=bt.path_blocked_lookahead, blocked_timeout=bt.blocked_timeout,
-                                  pending_timeout=bt.pending_timeout, input_grace_s=bt.input_grace_s,
-                                  global_frame=bt.global_frame,
-                                  robot_base_frame=bt.robot_base_frame),
+        global_costmap=gcm, local_costmap=lcm, controller=controller,
+        planner=PlannerConfig(**into.get(PlannerConfig, {})),
+        goal_checker=GoalCheckerConfig(**into.get(GoalCheckerConfig, {})),
+        progress_checker=ProgressCheckerConfig(**into.get(ProgressCheckerConfig, {})),
+        recovery=RecoveryConfig(**into.get(RecoveryConfig, {})),
+        navigator=NavigatorConfig(**into.get(NavigatorConfig, {})),
+        mppi=MppiConfig(**into[MppiConfig]) if MppiConfig in into else None,
     )
-    if gcm.resolution <= 0 or (cfg.controller.max_vel_x <= 0):
-        raise ParamsError(f"{where}: invalid resolution or velocity")
     topics.setdefault("map", map_topic)
-    return LoadedParams(cfg, topics, rd.warnings, where)
+    return LoadedParams(cfg, topics, rd.warnings, rd.unused, where)

@@ -17,9 +17,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from nav2_wrapper.core import Footprint, Navigator
+from nav2_wrapper.core import Navigator
 from nav2_wrapper.core.warmup import compile_in_background
 from nav2_wrapper.params import LoadedParams, ParamsError, load_params
+from nav2_wrapper.params_schema import COMPAT_NOTE
+from nav2_wrapper.robot_io import RobotDescriptionError, load_robot
 from robonix_api import Deferred, Err, Service
 from robonix_api.dds import Path as PathMsg
 from robonix_api.dds import Twist
@@ -71,9 +73,9 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
             return Err(f"config: {exc}")
         fp_path = cfg.resolve_path(cfg.robot_description)
         try:
-            footprint = Footprint.from_robot_yaml(fp_path)
-        except Exception as exc:  # OSError, YAML, missing key, bad polygon: all mean the same to an operator
-            return Err(f"robot_description: cannot read a footprint from {fp_path}: {exc}")
+            robot = load_robot(fp_path)
+        except RobotDescriptionError as exc:
+            return Err(f"robot_description: {exc}")
         try:
             bindings = resolve(self.svc.atlas, self.svc.id, cfg)
         except MissingUpstream as exc:
@@ -82,7 +84,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
             params = load_params(cfg.params_source, map_topic=bindings["map"].topic,
                                  odom_topic=bindings["odom"].topic,
                                  scan_topic=bindings["scan"].topic if "scan" in bindings else "",
-                                 footprint=footprint)
+                                 footprint=robot.footprint, limits=robot.limits)
         except ParamsError as exc:
             return Err(f"{'params_file' if cfg.params_file.strip() else 'params_profile'}: {exc}")
         self._report(cfg, bindings, params)
@@ -129,6 +131,9 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         """Log every params warning (each names its parameter) and every binding with where it came from."""
         for w in params.warnings:
             log.warning("params %s: %s", params.source, w)
+        if params.unused:
+            log.warning("params %s: %d parameter(s) %s: %s", params.source, len(params.unused), COMPAT_NOTE,
+                        ", ".join(params.unused))
         for role, b in bindings.items():
             log.info("%s: %s (qos %s, %s%s)", role, b.topic, b.qos, b.source,
                      f" provider {b.provider_id}" if b.provider_id else "")

@@ -16,15 +16,15 @@ from typing import Any
 from nav2_wrapper.core import GoalRecord
 from nav2_wrapper.core.navigator import FAILED, TERMINAL
 from robonix_api import telemetry
+from robonix_common.geometry import Pose2D
 
 SPAN_NAME = "nav.navigate"
-Pose = tuple[float, float, float]
 
 
 class _Open:
     __slots__ = ("span", "rec", "last", "driven")
 
-    def __init__(self, span: Any, rec: GoalRecord, pose: Pose | None) -> None:
+    def __init__(self, span: Any, rec: GoalRecord, pose: Pose2D | None) -> None:
         self.span, self.rec, self.last, self.driven = span, rec, pose, 0.0
 
 
@@ -41,7 +41,7 @@ class GoalSpans:
         tracer = telemetry.tracer()
         return cls(tracer, frame) if tracer is not None else None
 
-    def start(self, rec: GoalRecord, parent: Any, pose: Pose | None) -> None:
+    def start(self, rec: GoalRecord, parent: Any, pose: Pose2D | None) -> None:
         x, y, yaw = rec.goal
         span = self._tracer.start_span(SPAN_NAME, context=parent)
         telemetry.set_attributes(span, (
@@ -51,7 +51,7 @@ class GoalSpans:
             ("nav.goal_distance_m", math.hypot(x - pose[0], y - pose[1]) if pose else None)))
         self._open[rec.run_id] = _Open(span, rec, pose)
 
-    def sweep(self, pose: Pose | None) -> None:
+    def sweep(self, pose: Pose2D | None) -> None:
         """Add the distance driven since the last tick; end the spans of runs that reached a terminal state."""
         for rid, o in list(self._open.items()):
             if pose is not None and o.last is not None:

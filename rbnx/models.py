@@ -16,8 +16,10 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from rbnx.boot.supervise import RestartMode, RestartPolicy
 from rbnx.envexpand import apply_env_section, expand_tree
-from rbnx.supervise import RestartMode, RestartPolicy
+from robonix_common.errors import field_path, field_problems
+from robonix_common.errors import validation_lines as common_validation_lines
 
 KINDS: tuple[str, ...] = ("primitive", "service", "skill")
 DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
@@ -107,7 +109,7 @@ class PackageManifest(BaseModel):
 
 
 class RestartFields(BaseModel):
-    """Supervision of one process by `rbnx boot` (see rbnx/supervise.py): whether it is started again
+    """Supervision of one process by `rbnx boot` (see rbnx/boot/supervise.py): whether it is started again
     after it exits on its own, how many times in a row at most, and the first backoff delay."""
 
     restart: RestartMode = "never"
@@ -195,29 +197,13 @@ class DeployFile(BaseModel):
 # ---------------------------------------------------------------- helpers
 
 
-def loc_to_path(loc: tuple[Any, ...]) -> str:
-    """('service', 1, 'name') -> 'service[1].name'."""
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
-    return out or "(top level)"
-
-
-def _msg(err: Mapping[str, Any]) -> str:
-    msg = str(err.get("msg", "invalid"))
-    if err.get("type") == "missing":
-        return "missing required key"
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    return msg[:1].lower() + msg[1:]
+#: ('service', 1, 'name') -> 'service[1].name' (the project's one formatter, robonix_common.errors).
+loc_to_path = field_path
 
 
 def validation_lines(label: str, exc: ValidationError) -> list[str]:
-    return [f"{label}: {loc_to_path(tuple(e['loc']))}: {_msg(e)}" for e in exc.errors()]
+    """One ``label: path: message`` problem per pydantic error."""
+    return [f"{label}: {line}" for line in common_validation_lines(exc)]
 
 
 def read_yaml(path: Path, label: str | None = None) -> Any:
@@ -349,6 +335,21 @@ def section_order(raw: Mapping[str, Any]) -> list[str]:
     return present + [k for k in KINDS if k not in present]
 
 
+def _expand_deploy(raw: dict[str, Any], base_env: dict[str, str],
+                   label: str) -> tuple[dict[str, Any], dict[str, str], list[str]]:
+    """Apply the deploy file's ``env:`` section to ``base_env`` and expand ``${VAR}`` in every other section;
+    returns the expanded document, the environment and the problems (each prefixed with ``label``)."""
+    problems: list[str] = []
+    env_section = raw.get("env")
+    env = base_env
+    if isinstance(env_section, dict):
+        env_problems: list[str] = []
+        env = apply_env_section(env_section, base_env, env_problems)
+        problems += [f"{label}: {p}" for p in env_problems]
+    expanded = {k: (v if k == "env" else expand_tree(v, env, str(k), problems)) for k, v in raw.items()}
+    return expanded, env, [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
+
+
 def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: str | None = None) -> ResolvedDeploy:
     """Parse, expand, validate a deploy file and every package it references; all problems at once."""
     path = Path(path)
@@ -360,20 +361,12 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     if not isinstance(raw, dict):
         raise ManifestProblems([f"{label}: top level must be a mapping, got {type(raw).__name__}"])
 
-    problems: list[str] = []
-    env_section = raw.get("env")
-    env = base_env
-    if isinstance(env_section, dict):
-        env_problems: list[str] = []
-        env = apply_env_section(env_section, base_env, env_problems)
-        problems += [f"{label}: {p}" for p in env_problems]
-    expanded = {k: (v if k == "env" else expand_tree(v, env, str(k), problems)) for k, v in raw.items()}
-    problems = [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
+    expanded, env, problems = _expand_deploy(raw, base_env, label)
     found = _source_problems(expanded)
     try:
         model = DeployFile.model_validate(expanded)
     except ValidationError as exc:
-        found += [(tuple(e["loc"]), _msg(e)) for e in exc.errors()]
+        found += field_problems(exc)
     if found:
         order = {k: i for i, k in enumerate(expanded)}
         found.sort(key=lambda lm: (order.get(lm[0][0], -1) if lm[0] else -1,

@@ -11,9 +11,6 @@ SLAM is not confused by the recorded run's own map->odom.
 
 from __future__ import annotations
 
-import argparse
-import signal
-import sys
 import threading
 import time
 from collections.abc import Callable
@@ -86,27 +83,13 @@ class Replayer:
 
     def run(self, stop: threading.Event | None = None,
             on_progress: Callable[[float, ReplayStats], None] | None = None) -> ReplayStats:
-        from rbnx.rosmsg import KNOWN, type_by_name
         from robonix_api.dds import Clock, DdsNode, Time
 
         stop = stop or threading.Event()
         reader = self._open()
         node = DdsNode(domain_id=self.domain_id, name="rbnx_replay")
         try:
-            conns, pubs, types = [], {}, {}
-            for c in reader.connections:
-                if self.topics is not None and c.topic not in self.topics:
-                    continue
-                cls = type_by_name(c.msgtype)
-                if cls is None:
-                    self.stats.skipped_types[c.topic] = c.msgtype
-                    continue
-                out = self.remaps.get(c.topic, c.topic)
-                if out not in pubs:
-                    qos = KNOWN[c.topic].qos if c.topic in KNOWN else "reliable"
-                    pubs[out] = node.create_publisher(out, cls, qos, 1 if qos == "latched" else 100)
-                conns.append(c)
-                types[c.id] = (cls, out)
+            conns, pubs, types = self._publishers(reader, node)
             if not conns:
                 raise ReplayError(f"{self.path}: nothing to replay (no topic of a known type selected)")
             recorded_clock = any(c.topic == CLOCK for c in conns)
@@ -146,58 +129,32 @@ class Replayer:
             reader.close()
         return self.stats
 
+    def _publishers(self, reader: Any, node: Any) -> tuple[list[Any], dict[str, Any], dict[int, tuple[Any, str]]]:
+        """The recorded connections to replay, one publisher per (remapped) topic, and each connection's
+        message class and output topic; connections of unknown types are counted in ``stats.skipped_types``."""
+        from rbnx.rosmsg import KNOWN, type_by_name
+
+        conns: list[Any] = []
+        pubs: dict[str, Any] = {}
+        types: dict[int, tuple[Any, str]] = {}
+        for c in reader.connections:
+            if self.topics is not None and c.topic not in self.topics:
+                continue
+            cls = type_by_name(c.msgtype)
+            if cls is None:
+                self.stats.skipped_types[c.topic] = c.msgtype
+                continue
+            out = self.remaps.get(c.topic, c.topic)
+            if out not in pubs:
+                qos = KNOWN[c.topic].qos if c.topic in KNOWN else "reliable"
+                pubs[out] = node.create_publisher(out, cls, qos, 1 if qos == "latched" else 100)
+            conns.append(c)
+            types[c.id] = (cls, out)
+        return conns, pubs, types
+
     @staticmethod
     def _sleep_until(t: float, stop: threading.Event) -> bool:
         dt = t - time.monotonic()
         if dt > 0:
             return not stop.wait(dt)
         return not stop.is_set()
-
-
-# ---------------------------------------------------------------------- CLI
-
-
-def add_parser(sub: Any) -> None:
-    r = sub.add_parser("replay", help="publish a recording (.mcap, .db3, rosbag2 dir) on DDS with /clock")
-    r.add_argument("file", help="recording: our .mcap, a ROS 2 bag (.mcap / .db3) or a rosbag2 directory")
-    r.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1.0)")
-    r.add_argument("--loop", action="store_true", help="start over at the end")
-    r.add_argument("--remap", action="append", default=[], metavar="FROM:=TO", help="topic remap (repeatable)")
-    r.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these recorded topics")
-    r.add_argument("--drop-tf", action="append", default=[], metavar="CHILD_FRAME",
-                   help="drop /tf transforms to this child frame (repeatable), e.g. odom")
-    r.add_argument("--no-clock", action="store_true", help="publish no /clock")
-    r.add_argument("--delay", type=float, default=1.0, help="seconds to wait for subscribers (default 1)")
-    r.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: the environment's)")
-
-
-def cmd_replay(args: argparse.Namespace) -> int:
-    stop = threading.Event()
-    try:
-        remaps = dict(parse_remap(a) for a in args.remap)
-        if not args.delay >= 0:
-            raise ReplayError(f"--delay: must be >= 0, got {args.delay}")
-        rep = Replayer(args.file, rate=args.rate, loop=args.loop, remaps=remaps, topics=args.topics,
-                       drop_tf=args.drop_tf, clock=not args.no_clock, delay_s=args.delay,
-                       domain_id=args.domain_id)
-    except ReplayError as exc:
-        print(f"rbnx replay: {exc}", file=sys.stderr)
-        return 2
-    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
-    last = [0.0]
-
-    def progress(rel: float, st: ReplayStats) -> None:
-        if sys.stdout.isatty() and time.monotonic() - last[0] > 0.5:
-            last[0] = time.monotonic()
-            print(f"\r{rel:7.1f} / {st.bag_s:.1f} s  {sum(st.published.values())} messages", end="", flush=True)
-
-    try:
-        stats = rep.run(stop, progress)
-    except ReplayError as exc:
-        print(f"rbnx replay: {exc}", file=sys.stderr)
-        return 1
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-    print(("\ninterrupted: " if stop.is_set() else "\n") + stats.summary(), flush=True)
-    return 130 if stop.is_set() else 0

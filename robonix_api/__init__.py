@@ -7,6 +7,7 @@ Importing the SDK also makes the bundled generated protos importable under their
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 from robonix_api import (
@@ -67,10 +68,8 @@ def _bootstrap_caller_codegen() -> None:
         ensure_proto_gen(root)
 
 
-try:
+with contextlib.suppress(OSError):  # an unreadable folder on the way up must not break importing the SDK
     _bootstrap_caller_codegen()
-except OSError:  # an unreadable folder on the way up must not break importing the SDK
-    pass
 del _bootstrap_caller_codegen
 
 

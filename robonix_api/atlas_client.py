@@ -42,6 +42,7 @@ REGISTRATION_ID_KEY = "robonix-registration-id"
 
 
 def default_address() -> str:
+    """$ROBONIX_ATLAS, else 127.0.0.1:50051: where every client looks for the atlas unless told."""
     return os.environ.get("ROBONIX_ATLAS", "").strip() or DEFAULT_ADDRESS
 
 
@@ -69,9 +70,11 @@ class HeartbeatHandle(threading.Thread):
 
     @property
     def running(self) -> bool:
+        """Whether the heartbeat thread still runs (it stops on ``stop()`` or when the atlas forgets us)."""
         return self.is_alive()
 
     def run(self) -> None:
+        """Send a heartbeat every ``period_s`` until stopped; log an unreachable atlas once, not every beat."""
         unavailable_logged = False
         while not self._stopping.wait(self.period_s):
             try:
@@ -102,6 +105,7 @@ class HeartbeatHandle(threading.Thread):
                 log.exception("heartbeat %s: unexpected error", self.id)
 
     def stop(self, timeout: float = 5.0) -> None:
+        """Stop beating and wait up to ``timeout`` s for the thread (not when called from the thread itself)."""
         self._stopping.set()
         if self is not threading.current_thread():
             self.join(timeout)
@@ -193,19 +197,23 @@ class AtlasClient:
     def register_primitive(
         self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
     ) -> str:
+        """``register`` with kind PRIMITIVE (robonix-api's name); returns the registration id."""
         return self.register(Kind.PRIMITIVE, id, namespace, capability_md_path, capability_md)
 
     def register_service(
         self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
     ) -> str:
+        """``register`` with kind SERVICE (robonix-api's name); returns the registration id."""
         return self.register(Kind.SERVICE, id, namespace, capability_md_path, capability_md)
 
     def register_skill(
         self, id: str, namespace: str, capability_md_path: str = "", capability_md: str = ""
     ) -> str:
+        """``register`` with kind SKILL (robonix-api's name); returns the registration id."""
         return self.register(Kind.SKILL, id, namespace, capability_md_path, capability_md)
 
     def unregister(self, id: str) -> bool:
+        """Remove provider ``id`` and its channels; False when the atlas did not know it."""
         return self.stub.Unregister(atlas_pb2.UnregisterRequest(id=id), timeout=self.timeout).was_present
 
     def heartbeat(self, id: str) -> None:
@@ -300,16 +308,19 @@ class AtlasClient:
 
     def query_primitives(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
                          transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
+        """``query`` restricted to primitives (robonix-api's name)."""
         return self.query(kind=Kind.PRIMITIVE, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
     def query_services(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
                        transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
+        """``query`` restricted to services (robonix-api's name)."""
         return self.query(kind=Kind.SERVICE, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
     def query_skills(self, *, id: str = "", contract_id: str = "", namespace_prefix: str = "",
                      transport: Transport | int | str | None = Transport.UNSPECIFIED) -> list[CapabilityProvider]:
+        """``query`` restricted to skills (robonix-api's name)."""
         return self.query(kind=Kind.SKILL, id=id, contract_id=contract_id,
                           namespace_prefix=namespace_prefix, transport=transport)
 
@@ -388,6 +399,7 @@ class AtlasClient:
         )
 
     def disconnect(self, channel_id: str) -> bool:
+        """Close channel ``channel_id`` at the atlas; False when it was not open."""
         req = atlas_pb2.DisconnectCapabilityRequest(channel_id=channel_id)
         return self.stub.DisconnectCapability(req, timeout=self.timeout).was_open
 
@@ -398,18 +410,21 @@ class AtlasClient:
     # ----------------------------------------------------------------- contracts & inspection
 
     def query_contract(self, contract_id: str) -> ContractDescriptor | None:
+        """The catalogue entry of ``contract_id``, or None when the atlas has no such contract."""
         resp = self.stub.QueryContract(
             atlas_pb2.QueryContractRequest(contract_id=contract_id), timeout=self.timeout
         )
         return ContractDescriptor.from_pb(resp.contract) if resp.found else None
 
     def list_contracts(self, namespace_prefix: str = "") -> list[ContractDescriptor]:
+        """Catalogue entries whose id starts with ``namespace_prefix`` (all for "")."""
         resp = self.stub.ListContracts(
             atlas_pb2.ListContractsRequest(namespace_prefix=namespace_prefix), timeout=self.timeout
         )
         return [ContractDescriptor.from_pb(c) for c in resp.contracts]
 
     def inspect(self) -> dict[str, Any]:
+        """The atlas's InspectAtlas snapshot (providers, capabilities, channels) as parsed JSON."""
         return json.loads(self.stub.InspectAtlas(atlas_pb2.InspectAtlasRequest(), timeout=self.timeout).json)
 
 
@@ -450,12 +465,14 @@ class RobonixAtlas(AtlasClient):
         super().__init__(endpoint)
 
     def heartbeat(self, id: str) -> None:
+        """Like robonix-api: log a failed heartbeat instead of raising."""
         try:
             self.heartbeat_or_raise(id)
         except grpc.RpcError as exc:
             log.debug("heartbeat(%s): %s", id, exc)
 
     def unregister(self, id: str) -> bool:
+        """Like robonix-api: False (logged) instead of raising when the atlas call fails."""
         try:
             return super().unregister(id)
         except grpc.RpcError as exc:
@@ -471,6 +488,7 @@ class RobonixAtlas(AtlasClient):
         namespace_prefix: str = "",
         transport: Transport | int | str | None = Transport.UNSPECIFIED,
     ) -> list[CapabilityProvider]:
+        """Like robonix-api: [] (logged) instead of raising when the atlas call fails."""
         try:
             return super().query(kind=kind, id=id, contract_id=contract_id, transport=transport,
                                  namespace_prefix=namespace_prefix)
@@ -479,6 +497,7 @@ class RobonixAtlas(AtlasClient):
             return []
 
     def disconnect(self, channel_id: str) -> bool:
+        """Like robonix-api: False (logged) instead of raising when the atlas call fails."""
         try:
             return super().disconnect(channel_id)
         except grpc.RpcError as exc:
@@ -486,6 +505,7 @@ class RobonixAtlas(AtlasClient):
             return False
 
     def query_contract(self, contract_id: str) -> ContractDescriptor | None:
+        """Like robonix-api: None (logged) instead of raising when the atlas call fails."""
         try:
             return super().query_contract(contract_id)
         except grpc.RpcError as exc:
@@ -493,6 +513,7 @@ class RobonixAtlas(AtlasClient):
             return None
 
     def list_contracts(self, namespace_prefix: str = "") -> list[ContractDescriptor]:
+        """Like robonix-api: [] (logged) instead of raising when the atlas call fails."""
         try:
             return super().list_contracts(namespace_prefix)
         except grpc.RpcError as exc:
@@ -500,6 +521,7 @@ class RobonixAtlas(AtlasClient):
             return []
 
     def inspect(self) -> dict[str, Any]:
+        """Like robonix-api: {} (logged) instead of raising when the atlas call or its JSON fails."""
         try:
             return super().inspect()
         except (grpc.RpcError, ValueError) as exc:

@@ -25,6 +25,7 @@ from robonix_api.types import (
 
 
 def from_pb_field_spec(pb_f: Any) -> FieldSpec:
+    """robonix-api's converter name for :meth:`FieldSpec.from_pb`."""
     return FieldSpec.from_pb(pb_f)
 
 
@@ -37,14 +38,17 @@ def from_pb_params(transport: Transport | int | str, pb_params: Any) -> Transpor
 
 
 def from_pb_capability(pb_cap: Any) -> Capability:
+    """robonix-api's converter name for :meth:`Capability.from_pb`."""
     return Capability.from_pb(pb_cap)
 
 
 def from_pb_provider(pb_rec: Any) -> CapabilityProvider:
+    """robonix-api's converter name for :meth:`CapabilityProvider.from_pb`."""
     return CapabilityProvider.from_pb(pb_rec)
 
 
 def from_pb_contract(pb_c: Any) -> ContractDescriptor:
+    """robonix-api's converter name for :meth:`ContractDescriptor.from_pb`."""
     return ContractDescriptor.from_pb(pb_c)
 
 

@@ -45,6 +45,7 @@ def current_token() -> str:
 
 
 def is_read_only(contract_id: str) -> bool:
+    """Whether ``contract_id`` only reads state, so it is served without the deployment token."""
     return contract_id in READ_ONLY_CONTRACTS
 
 
@@ -144,9 +145,11 @@ class TokenClientInterceptor(grpc.UnaryUnaryClientInterceptor, grpc.UnaryStreamC
         return _ClientCallDetails(details, md)
 
     def intercept_unary_unary(self, continuation: Any, client_call_details: Any, request: Any) -> Any:
+        """Add the token to a unary call's metadata."""
         return continuation(self._details(client_call_details), request)
 
     def intercept_unary_stream(self, continuation: Any, client_call_details: Any, request: Any) -> Any:
+        """Add the token to a server-streaming call's metadata."""
         return continuation(self._details(client_call_details), request)
 
 
@@ -169,6 +172,8 @@ class TokenServerInterceptor(grpc.ServerInterceptor):
         self._protected = protected
 
     def intercept_service(self, continuation: Any, handler_call_details: Any) -> Any:
+        """Refuse a protected method called without the right deployment token (status and message from
+        :func:`refusal`); pass every other call through."""
         method = handler_call_details.method or ""
         if not current_token() or not self._protected(method):
             return continuation(handler_call_details)
@@ -230,8 +235,8 @@ def mcp_client(url: str, **kwargs: Any) -> Any:
         from mcp.client.streamable_http import streamable_http_client
         from mcp.shared._httpx_utils import create_mcp_http_client
 
-        async with create_mcp_http_client(headers=headers) as http:
-            async with Client(streamable_http_client(url, http_client=http), **kwargs) as client:
-                yield client
+        async with create_mcp_http_client(headers=headers) as http, \
+                Client(streamable_http_client(url, http_client=http), **kwargs) as client:
+            yield client
 
     return _with_headers()

@@ -3,10 +3,11 @@ frame names and coordinates the same way, with the same messages naming the fiel
 
 from __future__ import annotations
 
-import math
 from typing import Annotated
 
 from pydantic import AfterValidator
+
+from robonix_common.errors import check_finite
 
 
 def _topic(v: str, *, allow_empty: bool) -> str:
@@ -25,12 +26,6 @@ def _frame(v: str) -> str:
     return name
 
 
-def _finite(v: float) -> float:
-    if not math.isfinite(v):
-        raise ValueError("must be a finite number")
-    return v
-
-
 #: A ROS topic name; a leading "/" is added.
 TopicName = Annotated[str, AfterValidator(lambda v: _topic(v, allow_empty=False))]
 #: Like TopicName, but "" is allowed and means "not set" (e.g. resolve through the atlas instead).
@@ -38,4 +33,4 @@ OptionalTopicName = Annotated[str, AfterValidator(lambda v: _topic(v, allow_empt
 #: A TF frame id; a leading "/" is dropped (tf2 convention).
 FrameName = Annotated[str, AfterValidator(_frame)]
 #: A float that must not be NaN or infinite (poses, coordinates).
-FiniteFloat = Annotated[float, AfterValidator(_finite)]
+FiniteFloat = Annotated[float, AfterValidator(check_finite)]

@@ -33,6 +33,7 @@ class ContractError(ValueError):
 
 @dataclass(frozen=True)
 class ContractSpec:
+    """One contract of the TOML catalogue (robonix's format): id, kind, mode, IDL type and its docs."""
     id: str
     version: str
     kind: str
@@ -55,6 +56,7 @@ class ContractSpec:
 
     @property
     def is_srv(self) -> bool:
+        """Whether the contract's IDL is a ROS service (.srv) rather than a message."""
         return Path(self.idl).suffix == ".srv"
 
     @property
@@ -64,16 +66,19 @@ class ContractSpec:
 
     @property
     def service_name(self) -> str:
+        """The gRPC service that carries this contract (robonix's naming)."""
         return contract_service_name(self.id)
 
     @property
     def method_name(self) -> str:
+        """The gRPC method: the .srv type name, else the contract's last segment in UpperCamel."""
         if self.is_srv:
             return self.type_name
         return upper_camel(self.id.rsplit("/", 1)[-1])
 
     @property
     def grpc_path(self) -> str:
+        """The full gRPC method path, ``/robonix.contracts.<Service>/<Method>``."""
         return f"/robonix.contracts.{self.service_name}/{self.method_name}"
 
     @property
@@ -100,6 +105,7 @@ def contract_service_name(contract_id: str) -> str:
 
 
 def parse_contract(path: Path) -> ContractSpec:
+    """Read one contract TOML file; a ValueError names the file and the bad or missing key."""
     try:
         data = tomllib.loads(path.read_text())
     except (OSError, tomllib.TOMLDecodeError) as exc:

@@ -65,6 +65,7 @@ class Reply:
     error: str = ""
 
     def to_proto(self) -> lifecycle_pb2.Driver_Response:
+        """As the wire ``Driver_Response``, the error cut to ERROR_MAX characters."""
         error = self.error if len(self.error) <= ERROR_MAX else self.error[: ERROR_MAX - 20] + \
             f"... ({len(self.error)} chars)"  # a handler's Err may echo a huge config value
         return lifecycle_pb2.Driver_Response(ok=self.ok, state=self.state, error=error)
@@ -156,6 +157,7 @@ class Lifecycle:
 
     @property
     def state(self) -> str:
+        """The current lifecycle state name (registered, inactive, active, …)."""
         return self._state
 
     @property
@@ -164,6 +166,7 @@ class Lifecycle:
         return self._detail
 
     def set_push(self, push_state: PushState | None) -> None:
+        """Where state changes are reported (the provider pushes them to the atlas); None stops reporting."""
         self._push = push_state
 
     def handle(self, command: int, config_json: str = "") -> Reply:
@@ -237,6 +240,7 @@ class DriverServicer(robonix_contracts_pb2_grpc.RobonixLifecycleDriverServicer):
         self._lifecycle = lifecycle
 
     def Driver(self, request: lifecycle_pb2.Driver_Request, context: Any) -> lifecycle_pb2.Driver_Response:
+        """The gRPC Driver call: run the command (in a trace span when tracing is on) and reply."""
         tracer = telemetry.tracer()
         if tracer is None:
             return self._drive(request, context)

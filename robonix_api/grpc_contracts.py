@@ -111,5 +111,6 @@ def _is_abort(exc: Exception) -> bool:
 
 
 def add_servicer(spec: ContractSpec, servicer: Any, server: grpc.Server) -> None:
+    """Register ``servicer`` for ``spec``'s generated gRPC service on ``server``."""
     _, add = generated_servicer(spec)
     add(servicer, server)

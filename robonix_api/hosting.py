@@ -46,7 +46,8 @@ REINIT, SHUTDOWN, INIT_FAILED = "re-initialized", "shutting down", "init failed"
 class Work(Protocol):
     """The running work of one session (a loop object): stopped by ``close(reason)``."""
 
-    def close(self, reason: str) -> None: ...
+    def close(self, reason: str) -> None:
+        """Stop the running work; ``reason`` says why (re-init, shutdown, init failed)."""
 
 
 C = TypeVar("C")  # what prepare() produced: the validated settings of one CMD_INIT
@@ -93,9 +94,11 @@ class SessionHost(Generic[C, W]):
 
     # ------------------------------------------------------------------ what a provider writes
     def prepare(self, config: dict[str, Any]) -> C | Err | Deferred:
+        """Validate one CMD_INIT config: the settings to start from, ``Err`` naming the field, or ``Deferred``."""
         raise NotImplementedError
 
     def start(self, setup: C) -> W | Err:
+        """Build and start the work of a new session from prepared settings, or ``Err``."""
         raise NotImplementedError
 
     def activate(self, work: W) -> None:

@@ -66,9 +66,11 @@ class DeferredMcpServer:
 
     @property
     def loaded(self) -> bool:
+        """Whether the MCP stack has been loaded (first client or preload timer)."""
         return self._loaded.is_set()
 
     def wait_loaded(self, timeout_s: float) -> bool:
+        """Wait up to ``timeout_s`` for the MCP stack to load; True once it has."""
         return self._loaded.wait(timeout_s)
 
     def _wait_then_load(self) -> None:

@@ -79,10 +79,12 @@ class McpTool:
 
     @property
     def name(self) -> str:
+        """The MCP tool name: the contract id's last segment."""
         return self.spec.tool_name
 
     @classmethod
     def build(cls, spec: ContractSpec, handler: Callable[..., Any], description: str = "") -> McpTool:
+        """A tool for ``spec`` served by ``handler``, its input schema derived from the request type."""
         shape = tool_shape(spec, handler, description)
         return cls(spec, handler, shape.description, shape.request_cls, shape.input_schema)
 
@@ -167,6 +169,7 @@ class McpToolServer:
         return self.port
 
     def stop(self, timeout_s: float = 5.0) -> None:
+        """Stop serving and wait up to ``timeout_s`` for the server thread."""
         if self._asgi is not None:
             self._asgi.stop(timeout_s)
             self._asgi = None
@@ -204,6 +207,7 @@ class AsgiServer:
         return self.port
 
     def stop(self, timeout_s: float = 5.0) -> None:
+        """Ask uvicorn to exit and wait up to ``timeout_s`` for its thread."""
         if self._server is not None:
             self._server.should_exit = True
         if self._thread is not None:

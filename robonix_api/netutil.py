@@ -26,6 +26,7 @@ def bind_host() -> str:
 
 
 def is_wildcard(host: str) -> bool:
+    """Whether ``host`` means every interface (0.0.0.0, ::, empty), which is no address to dial."""
     return host.strip() in _WILDCARDS
 
 

@@ -44,6 +44,7 @@ class ProtoGenAliasFinder(importlib.abc.MetaPathFinder):
         self.names = bundled_names()
 
     def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> importlib.machinery.ModuleSpec | None:
+        """Answer ``import <name>_pb2`` for a bundled generated module (robonix packages import them top-level)."""
         if "." in fullname or fullname not in self.names:
             return None
         return importlib.machinery.ModuleSpec(fullname, _AliasLoader())

@@ -32,6 +32,7 @@ class Err:
 
     @property
     def msg(self) -> str:
+        """robonix-api's name for ``message``."""
         return self.message
 
     def __bool__(self) -> bool:

@@ -101,6 +101,7 @@ class RosBackend:
 
     @classmethod
     def get(cls) -> RosBackend:
+        """The one backend of this process (created on first use)."""
         with cls._instance_lock:
             if cls._instance is None:
                 cls._instance = RosBackend()
@@ -117,11 +118,13 @@ class RosBackend:
             return self._node
 
     def create_publisher(self, msg_type: type | str, topic: str, qos: Any = 10) -> Any:
+        """rclpy-style ``create_publisher(msg_type, topic, qos)`` on the process's DDS node."""
         preset, depth = qos_and_depth(qos)
         return self.node.create_publisher(topic, resolve_msg_type(msg_type), preset, depth)
 
     def create_subscription(self, msg_type: type | str, topic: str, callback: Callable[[Any], None],
                             qos: Any = 10) -> Any:
+        """rclpy-style ``create_subscription(msg_type, topic, callback, qos)`` on the process's DDS node."""
         preset, depth = qos_and_depth(qos)
         return self.node.create_subscription(topic, resolve_msg_type(msg_type), callback, preset, depth)
 
@@ -138,6 +141,7 @@ class RosBackend:
         return resolve_qos(preset, depth)
 
     def shutdown(self) -> None:
+        """Close the DDS node (its publishers and subscriptions); a later call creates a new one."""
         with self._lock:
             node, self._node = self._node, None
         if node is not None:

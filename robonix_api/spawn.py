@@ -37,6 +37,7 @@ class SpawnRegistry:
 
     def spawn(self, argv: Sequence[str], *, env: dict[str, str] | None = None, log_path: Path | None = None,
               cwd: Path | None = None) -> subprocess.Popen[Any]:
+        """Start ``argv`` in its own process group with ``env`` added to ours, output to ``log_path``."""
         merged = dict(os.environ)
         if env:
             merged.update({k: str(v) for k, v in env.items()})
@@ -53,9 +54,11 @@ class SpawnRegistry:
 
     @property
     def processes(self) -> list[subprocess.Popen[Any]]:
+        """The children started and not yet shut down."""
         return self._groups.processes
 
     def shutdown_all(self, term_grace_s: float = 5.0) -> None:
+        """Stop every child's group: SIGTERM, ``term_grace_s`` to exit, then SIGKILL."""
         self._groups.kill_all(grace_s=term_grace_s)
 
 

@@ -96,6 +96,7 @@ def codegen_input_class(handler: Callable[..., Any]) -> type | None:
 
 
 def build_input(input_cls: type, arguments: dict[str, Any]) -> Any:
+    """A tool's JSON arguments as its request type (a protobuf message or a dataclass with ``from_dict``)."""
     if issubclass(input_cls, Message):
         return json_format.ParseDict(arguments, input_cls())
     return input_cls.from_dict(arguments)  # type: ignore[attr-defined]
@@ -153,5 +154,5 @@ def declare_app_tools(provider: Any, app: Any) -> None:
         provider.declare_mcp(contract_id, input_schema_json=json.dumps(schema), description=description)
 
 
-__all__ = ["build_input", "codegen_input_class", "declare_app_tools", "input_schema", "io_types_from_handler", "json_prop_to_py_type", "make_shim", "mcp_contract",
-           "wire_output_for_json"]
+__all__ = ["build_input", "codegen_input_class", "declare_app_tools", "input_schema", "io_types_from_handler",
+           "json_prop_to_py_type", "make_shim", "mcp_contract", "wire_output_for_json"]

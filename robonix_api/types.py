@@ -77,6 +77,7 @@ class _WireEnum(IntEnum):
 
 
 class Kind(_WireEnum):
+    """What a provider is: primitive (hardware), service or skill (wire values of atlas.proto)."""
     UNSPECIFIED = 0
     PRIMITIVE = 1
     SERVICE = 2
@@ -88,6 +89,7 @@ class Kind(_WireEnum):
 
 
 class Transport(_WireEnum):
+    """How a capability is reached: gRPC, ROS 2 (DDS topic) or MCP."""
     UNSPECIFIED = 0
     GRPC = 1
     ROS2 = 2
@@ -103,6 +105,7 @@ class Transport(_WireEnum):
 
 
 class LifecycleState(_WireEnum):
+    """A provider's lifecycle state as the atlas stores it."""
     UNSPECIFIED = 0
     REGISTERED = 1
     INACTIVE = 2
@@ -128,6 +131,7 @@ def _enum_or_raw(enum: type[_WireEnum], value: int) -> Any:
 
 @dataclass(frozen=True)
 class GrpcParams:
+    """Where a gRPC capability is served: proto file, service and method."""
     proto_file: str = "robonix_contracts.proto"
     service_name: str = ""
     method: str = ""
@@ -137,6 +141,7 @@ class GrpcParams:
 
 @dataclass(frozen=True)
 class Ros2Params:
+    """A ROS 2 capability's QoS profile (the topic is its endpoint)."""
     qos_profile: str = ""
 
     transport = Transport.ROS2
@@ -144,6 +149,7 @@ class Ros2Params:
 
 @dataclass(frozen=True)
 class McpParams:
+    """An MCP tool's JSON input schema."""
     input_schema_json: str = "{}"
 
     transport = Transport.MCP
@@ -222,6 +228,7 @@ class Capability:
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.Capability) -> Capability:
+        """From the atlas's protobuf record (unknown enum values kept as ints)."""
         return cls(
             provider_id=pb.provider_id,
             provider_kind=_enum_or_raw(Kind, pb.provider_kind),
@@ -233,6 +240,7 @@ class Capability:
         )
 
     def to_pb(self, out: atlas_pb2.Capability | None = None) -> atlas_pb2.Capability:
+        """As the atlas's protobuf record (into ``out`` when given)."""
         msg = out if out is not None else atlas_pb2.Capability()
         msg.provider_id = self.provider_id
         msg.provider_kind = int(self.provider_kind)
@@ -247,6 +255,7 @@ class Capability:
 
 @dataclass
 class CapabilityProvider:
+    """A registered provider as the atlas reports it: id, kind, namespace, state and capabilities."""
     id: str
     kind: Kind
     namespace: str
@@ -260,6 +269,7 @@ class CapabilityProvider:
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.CapabilityProvider) -> CapabilityProvider:
+        """From the atlas's protobuf record (unknown enum values kept as ints)."""
         return cls(
             id=pb.id,
             kind=_enum_or_raw(Kind, pb.kind),
@@ -274,6 +284,7 @@ class CapabilityProvider:
         )
 
     def to_pb(self, out: atlas_pb2.CapabilityProvider | None = None) -> atlas_pb2.CapabilityProvider:
+        """As the atlas's protobuf record (into ``out`` when given)."""
         msg = out if out is not None else atlas_pb2.CapabilityProvider()
         msg.id = self.id
         msg.kind = int(self.kind)
@@ -363,9 +374,11 @@ class FieldSpec:
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.FieldSpec) -> FieldSpec:
+        """From the atlas's protobuf record."""
         return cls(pb.name, pb.type_name, pb.is_primitive, pb.is_array, pb.array_size)
 
     def to_pb(self, out: atlas_pb2.FieldSpec | None = None) -> atlas_pb2.FieldSpec:
+        """As the atlas's protobuf record (into ``out`` when given)."""
         msg = out if out is not None else atlas_pb2.FieldSpec()
         msg.name = self.name
         msg.type_name = self.type_name
@@ -377,6 +390,7 @@ class FieldSpec:
 
 @dataclass(frozen=True)
 class ContractDescriptor:
+    """A catalogue entry as the atlas serves it: id, version, kind, mode, IDL types and fields."""
     id: str
     version: str = ""
     kind: Kind = Kind.UNSPECIFIED
@@ -402,6 +416,7 @@ class ContractDescriptor:
 
     @classmethod
     def from_pb(cls, pb: atlas_pb2.ContractDescriptor) -> ContractDescriptor:
+        """From the atlas's protobuf record."""
         return cls(
             id=pb.id,
             version=pb.version,
@@ -418,6 +433,7 @@ class ContractDescriptor:
         )
 
     def to_pb(self, out: atlas_pb2.ContractDescriptor | None = None) -> atlas_pb2.ContractDescriptor:
+        """As the atlas's protobuf record (into ``out`` when given)."""
         msg = out if out is not None else atlas_pb2.ContractDescriptor()
         msg.id = self.id
         msg.version = self.version

@@ -15,27 +15,22 @@ import grpc
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, create_model
 
 from robonix_api.grpc_contracts import StatusError
+from robonix_common.errors import check_finite, format_validation_error
 
 
 def field_errors(exc: ValidationError, *, unknown_key: str | None = None) -> str:
-    """``a.b: message; c: message``; ``unknown_key`` replaces pydantic's text for an unexpected key."""
-    parts = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"]) or "config"
-        msg = err["msg"].removeprefix("Value error, ")
-        if unknown_key is not None and err["type"] == "extra_forbidden":
-            msg = unknown_key
-        parts.append(f"{loc}: {msg}")
-    return "; ".join(parts)
+    """``a.b: message; c: message``; ``unknown_key`` replaces the wording for an unexpected key.
+
+    Kept as the SDK's name for :func:`robonix_common.errors.format_validation_error` (the one formatter).
+    """
+    return format_validation_error(exc, unknown=unknown_key, root="config")
 
 
 def finite(message: str = "must be a finite number") -> Any:
     """A float config field type that rejects NaN and ±inf with ``message`` (pair it with ``Field(gt=…)``)."""
 
     def check(v: float) -> float:
-        if not math.isfinite(v):
-            raise ValueError(message)
-        return v
+        return check_finite(v, message)
 
     return Annotated[float, AfterValidator(check)]
 

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nav2_wrapper.core import Costmap, CostmapConfig, Footprint, GlobalPlanner, PlannerConfig
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
 
@@ -21,7 +22,7 @@ class ShortestPaths:
 
     def __init__(self, grid: GridMap, footprint: Footprint | None = None) -> None:
         cfg = CostmapConfig(name="ground_truth", resolution=grid.resolution, obstacle_layer=False,
-                            observation_sources=[], footprint=footprint or Footprint.from_robot_yaml())
+                            observation_sources=[], footprint=footprint or load_footprint())
         self.costmap = Costmap(cfg)
         self.costmap.set_static_map(grid)
         self.planner = GlobalPlanner(PlannerConfig(tolerance=0.0, allow_unknown=False, cost_travel_multiplier=0.0,

@@ -18,24 +18,18 @@ from typing import Literal
 
 import numpy as np
 
-from hal_panda_mobile.sim import (
-    LidarNoise,
-    OdomNoise,
-    OdomState,
-    PandaMobileSim,
-    load_robot_description,
-    load_scene,
-)
-from nav2_wrapper.core import Command, LaserScan, Navigator
+from hal_panda_mobile.files import load_robot_description, load_scene
+from hal_panda_mobile.sim import LidarNoise, OdomNoise, OdomState, PandaMobileSim
+from nav2_wrapper.core import Command, Navigator, RangeScan
+from nav2_wrapper.core.mppi import MppiConfig
 from nav2_wrapper.core.navigator import TERMINAL
 from nav2_wrapper.params import load_params
-from robonix_common.geometry import compose
+from robonix_common.geometry import Pose2D, compose
 from robonix_common.grid import GridMap
 from slam_service.core import Scan, SlamConfig, SlamEngine
 
 from .metrics import ShortestPaths, yaw_error
 
-Pose = tuple[float, float, float]
 MapSource = Literal["slam", "ground_truth"]
 
 
@@ -51,6 +45,7 @@ class PipelineOptions:
     loop_closure: bool = True
     slam_config: SlamConfig | None = None
     nav_profile: str = "sim"
+    controller: Literal["profile", "pursuit", "mppi"] = "profile"  # override the profile's controller plugin
     physics_hz: float = 500.0
     odom_hz: float = 50.0
     scan_hz: float = 10.0
@@ -63,8 +58,8 @@ class PipelineOptions:
 class GoalResult:
     """One goal's outcome, scored against ground truth."""
 
-    goal: Pose
-    start: Pose
+    goal: Pose2D
+    start: Pose2D
     state: str  # SUCCEEDED / FAILED / CANCELED / TIMEOUT
     detail: str
     time: float  # s of sim time from send to a terminal state
@@ -106,24 +101,28 @@ class Pipeline:
             cfg = SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": o.loop_closure})
         self.slam = SlamEngine(cfg)
         self.params = load_params(o.nav_profile)
+        if o.controller == "mppi" and self.params.config.mppi is None:
+            self.params.config.mppi = MppiConfig(seed=o.seed)
+        elif o.controller == "pursuit":
+            self.params.config.mppi = None
         self.nav = Navigator(self.params.config)
         self.plan_times: list[float] = []
         self._wrap_planner()
         mx, my, _, myaw = self.robot.lidar.mount
-        self.mount: Pose = (mx, my, myaw)
+        self.mount: Pose2D = (mx, my, myaw)
         dt = self.sim.timestep
         self._every = {k: max(1, round(1.0 / (hz * dt)))
                        for k, hz in (("odom", o.odom_hz), ("scan", o.scan_hz), ("ctrl", o.control_hz))}
         self._next = dict(self._every)
         self._step = 0
         self.odom: OdomState = self.sim.odometry()
-        self.map_to_odom: Pose = (0.0, 0.0, 0.0)
-        self._scan: LaserScan | None = None
-        self._sensor_pose: Pose | None = None
+        self.map_to_odom: Pose2D = (0.0, 0.0, 0.0)
+        self._scan: RangeScan | None = None
+        self._sensor_pose: Pose2D | None = None
         self._map_dirty = False
         self._map_sent_at = -math.inf
-        self.gt_at_scan: dict[float, Pose] = {}  # sim stamp -> true pose, for trajectory scoring
-        self.odom_at_scan: dict[float, Pose] = {}  # sim stamp -> odometry pose (what SLAM was given)
+        self.gt_at_scan: dict[float, Pose2D] = {}  # sim stamp -> true pose, for trajectory scoring
+        self.odom_at_scan: dict[float, Pose2D] = {}  # sim stamp -> odometry pose (what SLAM was given)
         self.last_cmd = Command(0.0, 0.0, 0.0, "IDLE", "idle")
         self.driven = 0.0  # m of ground-truth travel since construction
         self._last_xy = self.sim.ground_truth()[:2]
@@ -149,11 +148,11 @@ class Pipeline:
     def time(self) -> float:
         return self.sim.time
 
-    def ground_truth_pose(self) -> Pose:
+    def ground_truth_pose(self) -> Pose2D:
         x, y, yaw, *_ = self.sim.ground_truth()
         return (x, y, yaw)
 
-    def pose_map(self) -> Pose:
+    def pose_map(self) -> Pose2D:
         """The robot pose the navigator uses: SLAM's map→odom composed with the latest odometry message."""
         if self.options.nav_map == "ground_truth":
             return self.ground_truth_pose()
@@ -200,7 +199,7 @@ class Pipeline:
                                    self.mount, s.frame_id), (odom.x, odom.y, odom.yaw), s.stamp)
         self.map_to_odom = (float(u.map_to_odom[0]), float(u.map_to_odom[1]), float(u.map_to_odom[2]))
         self._map_dirty |= u.map_changed
-        self._scan = LaserScan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        self._scan = RangeScan(s.ranges.astype(np.float64), s.angle_min, s.angle_increment, s.range_min, s.range_max)
         base = (compose(self.map_to_odom, (odom.x, odom.y, odom.yaw)) if self.options.nav_map == "slam"
                 else self.ground_truth_pose())
         sp = compose(base, self.mount)

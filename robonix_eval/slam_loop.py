@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim, load_robot_description, load_scene
+from hal_panda_mobile.files import load_robot_description, load_scene
+from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
 # Named-waypoint routes for the navigation evaluations (tests/integration/robonix_eval/test_nav_noise.py,

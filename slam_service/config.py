@@ -1,7 +1,8 @@
 """The provider's CMD_INIT config, validated so every error names the field at fault.
 
 pydantic checks shapes and numbers (``extra="forbid"``: a typo is an error, not a silently ignored
-key); the ``slam`` block goes to :meth:`SlamConfig.from_dict`, which names unknown or bad keys itself.
+key); the ``slam`` block goes to :meth:`SlamConfig.from_dict`, which names unknown or bad keys itself
+against the ranges declared on its fields.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from robonix_api.config_types import FiniteFloat, FrameName, OptionalTopicName
 from robonix_api.validation import Seconds, field_errors, per_role
+from robonix_common.params import ParamError
 from robonix_nav_data import resources
 from slam_service.core import SlamConfig
 from slam_service.map_paths import default_maps_root
@@ -84,26 +86,6 @@ def resolve_path(path: str) -> Path:
     return REPO_ROOT / p
 
 
-#: Physical ranges of the SLAM tunables whose extremes pass the core's own checks (> 0, finite) but
-#: would exhaust memory or CPU: a 1e-9 m resolution, a 1e-300 rad angular step, a 1e6 m search window.
-SLAM_LIMITS: dict[str, tuple[float, float]] = {
-    "resolution": (0.005, 1.0), "max_range": (0.1, 100.0), "search_window_xy": (0.0, 5.0),
-    "search_window_theta": (0.0, math.pi), "angular_step": (0.0005, 0.5), "smear_sigma": (0.0, 5.0),
-    "coarse_factor": (1, 64), "running_buffer_size": (1, 1000), "lookup_rebuild_nodes": (1, 1000),
-    "loop_search_radius": (0.0, 100.0), "loop_submap_radius": (0.0, 100.0), "loop_search_window_xy": (0.0, 10.0),
-    "loop_search_window_theta": (0.0, math.pi), "loop_coarse_factor": (1, 64), "optimizer_iterations": (1, 1000),
-    "grid_chunk": (8, 4096), "min_valid_beams": (1, 100_000), "loop_cooldown_nodes": (0, 100_000),
-    "loop_retry_nodes": (0, 100_000),
-}
-
-
-def _check_slam_limits(slam: SlamConfig) -> None:
-    for name, (lo, hi) in SLAM_LIMITS.items():
-        v = getattr(slam, name, None)
-        if isinstance(v, int | float) and not lo <= v <= hi:
-            raise ConfigError(f"slam.{name}: must be within [{lo:g}, {hi:g}], got {v:g}")
-
-
 def parse_config(raw: dict[str, Any]) -> tuple[ProviderConfig, SlamConfig]:
     """Validate the CMD_INIT dict; ConfigError names the field."""
     try:
@@ -112,9 +94,10 @@ def parse_config(raw: dict[str, Any]) -> tuple[ProviderConfig, SlamConfig]:
         raise ConfigError(field_errors(exc)) from None
     try:
         slam = SlamConfig.from_dict(dict(cfg.slam))
+    except ParamError as exc:  # ranges are declared on SlamConfig's fields, once
+        raise ConfigError(f"slam.{exc.field}: {exc.reason[:300]}") from None
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"slam: {str(exc)[:300]}") from None
-    _check_slam_limits(slam)
     if cfg.initial_pose is not None and not cfg.map_id:
         raise ConfigError("initial_pose: only meaningful with map_id (the pose in that map)")
     if cfg.mode == "localization" and not cfg.map_id:

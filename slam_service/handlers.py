@@ -18,9 +18,10 @@ import grpc
 from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
 from robonix_api.validation import require_finite, require_range
-from slam_service.core import SlamEngine, render_map_png
+from slam_service.core import SlamEngine
 from slam_service.map_paths import check_note, clip
 from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.render import render_map_png
 
 log = logging.getLogger("slam_service.handlers")
 NS = "robonix/service/map/"
@@ -78,7 +79,7 @@ class MapHandlers:
             session = engine.session() if engine.graph.n_nodes else None
         writer = None
         if session is not None:
-            from slam_service.core import save_session
+            from slam_service.session_io import save_session
 
             def writer(path: Any) -> None:
                 save_session(session, path)
@@ -95,7 +96,8 @@ class MapHandlers:
         map_id = _map_id(req.map_id)
         mode = req.mode.strip() or "localization"
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                              f"mode: must be mapping or localization, got {clip(mode)}")
         if req.has_initial_pose:
             _pose_in_range(req)
         s = self._session()
@@ -139,7 +141,8 @@ class MapHandlers:
         """mapping <-> localization (localization on the loaded map, or on the map built so far)."""
         mode = req.mode.strip()
         if mode not in MODES:
-            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, f"mode: must be mapping or localization, got {clip(mode)}")
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT,
+                              f"mode: must be mapping or localization, got {clip(mode)}")
         s = self._session()
         if s is None:
             return map_pb2.SwitchMode_Response(ok=False, detail=NOT_INIT)

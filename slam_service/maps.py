@@ -26,7 +26,7 @@ from typing import Any
 
 from robonix_api.mapfile import MapFileError, atomic_write, load_map_yaml, save_map_yaml
 from robonix_common.grid import GridMap
-from slam_service.core import SessionData, SessionFileError, SlamConfig, SlamEngine, load_session
+from slam_service.core import SessionData, SlamConfig, SlamEngine
 from slam_service.map_paths import (
     MARKER,
     NOTE_MAX,
@@ -38,6 +38,7 @@ from slam_service.map_paths import (
     resolve_map_dir,
     stale_staging,
 )
+from slam_service.session_io import SessionFileError, load_session
 
 log = logging.getLogger("slam_service.maps")
 MAP_YAML, MAP_PGM, SESSION, META = "map.yaml", "map.pgm", "session.npz", "meta.json"
@@ -153,10 +154,12 @@ class MapStore:
                 session_writer(stage / SESSION)
             meta = {"map_id": map_id, "note": note, "created": time.time(),
                     "created_iso": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "resolution": grid.resolution,
-                    "width": grid.width, "height": grid.height, "origin": [grid.origin_x, grid.origin_y, grid.origin_yaw],
+                    "width": grid.width, "height": grid.height,
+                    "origin": [grid.origin_x, grid.origin_y, grid.origin_yaw],
                     "has_session": session_writer is not None}
             atomic_write(stage / META, json.dumps(meta, indent=1).encode())
-            atomic_write(stage / MARKER, b"written by the robonix-nav map store; delete_map removes only such folders\n")
+            atomic_write(stage / MARKER,
+                         b"written by the robonix-nav map store; delete_map removes only such folders\n")
             with self._swap_lock():
                 self._swap(map_id, stage, target)
         except Exception as exc:
@@ -291,7 +294,7 @@ class Autosave:
         self.path = self.folder / SESSION
 
     def write(self, session: SessionData) -> Path:
-        from slam_service.core import save_session
+        from slam_service.session_io import save_session
 
         self.folder.mkdir(parents=True, exist_ok=True)
         return save_session(session, self.path)
@@ -318,8 +321,6 @@ def resume_engine(session: SessionData, slam_cfg: SlamConfig) -> tuple[SlamEngin
 
     engine = SlamEngine(slam_cfg, "mapping")
     engine.load(session=session, mode="mapping")
-    if session.graph.n_nodes:
-        m2o = compose(session.graph.poses[-1], inverse(session.odom[-1]))
-    else:
-        m2o = engine.map_to_odom()
+    last_node = session.graph.n_nodes > 0
+    m2o = compose(session.graph.poses[-1], inverse(session.odom[-1])) if last_node else engine.map_to_odom()
     return engine, (float(m2o[0]), float(m2o[1]), float(m2o[2]))

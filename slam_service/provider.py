@@ -21,7 +21,7 @@ from robonix_api.dds import MapLifecycle, OccupancyGrid
 from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
-from slam_service.core import SessionFileError, SlamConfig, SlamEngine
+from slam_service.core import SlamConfig, SlamEngine
 from slam_service.core.numeric import load_in_background
 from slam_service.handlers import MapHandlers
 from slam_service.loop import SlamLoop, install_engine_log_filter
@@ -35,6 +35,7 @@ from slam_service.maps import (
     load_engine,
     resume_engine,
 )
+from slam_service.session_io import SessionFileError
 from slam_service.telemetry import PAUSED, SHUTDOWN, LifecycleAnnouncer, MapSpans
 
 log = logging.getLogger("slam_service")

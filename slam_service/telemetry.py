@@ -22,7 +22,7 @@ from typing import Any
 from robonix_api import telemetry
 from robonix_api.dds import MapLifecycle
 from robonix_common.grid import GridMap
-from slam_service.core import render_map_png
+from slam_service.render import render_map_png
 
 log = logging.getLogger("slam_service.telemetry")
 

@@ -6,18 +6,18 @@ check, cmd_vel deadline), so Python overhead is paid per event, not per 2 ms phy
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import mujoco
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from robonix_common.grid import GridMap
 
-from .errors import SimConfigError, config_error
+from .errors import SimConfigError
 from .lidar import Lidar, ScanResult
 from .mjcf import BASE_BODY, LIDAR_SITE, OBSTACLE_PREFIX, build_mjcf, yaw_of
 from .odometry import Odometry, OdomNoise, OdomState
@@ -25,30 +25,41 @@ from .raster import rasterize
 from .robot import RobotDescription
 from .scene import Obstacle, Scene, check_start, first_collision
 from .shapes import Rect
+from .spec import check_ranges, param
 
 log = logging.getLogger(__name__)
 
 
-class LidarNoise(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+@dataclass(frozen=True)
+class LidarNoise:
+    """Range noise of the simulated lidar, when a run overrides the robot description's."""
 
-    noise_std: float = Field(0.0, ge=0)  # m, Gaussian on valid returns
-    dropout_prob: float = Field(0.0, ge=0, le=1)  # per beam, reported as +inf
+    noise_std: float = param(0.0, ge=0, doc="m, Gaussian on valid returns")
+    dropout_prob: float = param(0.0, ge=0, le=1, doc="per beam, reported as +inf")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
 
-class SimParams(BaseModel):
-    """Everything about a run that is not robot or scene; validated so errors name the field."""
+@dataclass(frozen=True)
+class SimParams:
+    """Everything about a run that is not robot or scene; checked so errors name the field."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    seed: int = 0
-    timestep: float = Field(0.002, gt=0, le=0.002)  # physics at >= 500 Hz
-    odom_rate_hz: float = Field(50.0, gt=0)
-    contact_check_interval: float = Field(0.01, gt=0)  # s between contact scans (>= one step)
-    collision_debounce: float = Field(0.2, ge=0)  # s without contact that ends an episode
-    odom_noise: OdomNoise = OdomNoise()
+    seed: int = param(0, ge=0, le=2**63 - 1, doc="seeds odometry and lidar noise; same seed, same run")
+    timestep: float = param(0.002, gt=0, le=0.002, doc="s, physics step (>= 500 Hz)")
+    odom_rate_hz: float = param(50.0, gt=0, le=1000.0, doc="sim-time Hz of odometry integration")
+    contact_check_interval: float = param(0.01, gt=0, doc="s between contact scans (>= one step)")
+    collision_debounce: float = param(0.2, ge=0, doc="s without contact that ends a collision episode")
+    odom_noise: OdomNoise = field(default_factory=OdomNoise)
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
-    odom_frame_at_start: bool = False  # True: odom starts at (0,0,0); False: odom frame == world frame
+    odom_frame_at_start: bool = param(False, doc="true: odom starts at (0, 0, 0); false: odom frame == world")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+        if not isinstance(self.odom_noise, OdomNoise):
+            raise SimConfigError(f"odom_noise: expected an OdomNoise, got {type(self.odom_noise).__name__}")
+        if self.lidar_noise is not None and not isinstance(self.lidar_noise, LidarNoise):
+            raise SimConfigError(f"lidar_noise: expected a LidarNoise or None, got {type(self.lidar_noise).__name__}")
 
 
 @dataclass(frozen=True)
@@ -73,14 +84,17 @@ class CmdStatus:
 
 
 class PandaMobileSim:
-    def __init__(self, robot: RobotDescription, scene: Scene, seed: int = 0,
-                 odom_noise: OdomNoise | dict | None = None, lidar_noise: LidarNoise | dict | None = None,
-                 **params: Any) -> None:
+    def __init__(self, robot: RobotDescription, scene: Scene, seed: int = 0, odom_noise: OdomNoise | None = None,
+                 lidar_noise: LidarNoise | None = None, **params: Any) -> None:
+        names = {f.name for f in dataclasses.fields(SimParams)}
+        unknown = sorted(set(params) - names)
+        if unknown:
+            raise SimConfigError(f"sim: {unknown[0]}: unknown parameter (known: {', '.join(sorted(names))})")
         try:
-            self.params = SimParams.model_validate({"seed": seed, "odom_noise": odom_noise or OdomNoise(),
-                                                    "lidar_noise": lidar_noise, **params})
-        except ValidationError as exc:
-            raise config_error(exc, prefix="sim: ") from exc
+            self.params = SimParams(seed=seed, odom_noise=odom_noise or OdomNoise(), lidar_noise=lidar_noise,
+                                    **params)
+        except SimConfigError as exc:
+            raise SimConfigError(f"sim: {exc}") from None
         check_start(scene, robot)
         self.robot, self.scene = robot, scene
         self.warnings: list[str] = []
@@ -139,7 +153,7 @@ class PandaMobileSim:
         self._deadline: int | None = None
         self._events: list[CollisionEvent] = []
         self._active: dict[tuple[str, str], int] = {}  # by name: survives the recompile of spawn_box
-        start = self.scene.start.as_tuple()
+        start = self.scene.start
         self.data.qpos[:3] = start
         mujoco.mj_forward(self.model, self.data)
         self._dirty = False
@@ -325,7 +339,7 @@ class PandaMobileSim:
             return {"name": ob.name, "ref": ob.ref, "height": ob.height, **shape}
 
         return {"name": self.scene.name, "description": self.scene.description,
-                "bounds": list(self.scene.bounds), "start": list(self.scene.start.as_tuple()),
+                "bounds": list(self.scene.bounds), "start": list(self.scene.start),
                 "waypoints": {k: list(v) for k, v in self.scene.waypoints.items()},
                 "obstacles": [desc(ob) for ob in self._all_obstacles()]}
 

@@ -13,15 +13,17 @@ so odometry equals ground truth to floating-point precision at any tick rate.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+
+from robonix_common.geometry import Pose2D
+
+from .spec import check_ranges, param
 
 MOVING_EPS = 1e-4  # m/s or rad/s: below this the base counts as at rest
-
-Pose = tuple[float, float, float]
 
 
 def _wrap(a: float) -> float:
@@ -30,27 +32,31 @@ def _wrap(a: float) -> float:
 
 # Scalar SE(2) ops: the same conventions as robonix_common.geometry.compose/relative, without numpy's
 # per-call overhead (these run at the odometry rate inside the stepping loop).
-def compose(a: Pose, b: Pose) -> Pose:
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
     c, s = math.cos(a[2]), math.sin(a[2])
     return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], _wrap(a[2] + b[2]))
 
 
-def relative(a: Pose, b: Pose) -> Pose:
+def relative(a: Pose2D, b: Pose2D) -> Pose2D:
     """Pose b expressed in frame a."""
     c, s = math.cos(a[2]), math.sin(a[2])
     dx, dy = b[0] - a[0], b[1] - a[1]
     return (c * dx + s * dy, -s * dx + c * dy, _wrap(b[2] - a[2]))
 
 
-class OdomNoise(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+@dataclass(frozen=True)
+class OdomNoise:
+    """The simulated wheel odometry's error model (the formulas are in this module's docstring)."""
 
-    v_scale_std: float = Field(0.0, ge=0)  # fraction, per tick
-    w_scale_std: float = Field(0.0, ge=0)
-    v_add_std: float = Field(0.0, ge=0)  # m/s, per tick
-    w_add_std: float = Field(0.0, ge=0)  # rad/s, per tick
-    scale_bias: float = 0.0  # systematic wheel-radius error (fraction)
-    w_bias: float = 0.0  # rad/s gyro-like yaw drift while moving
+    v_scale_std: float = param(0.0, ge=0, doc="std dev of the linear speed scale error per tick (fraction)")
+    w_scale_std: float = param(0.0, ge=0, doc="std dev of the yaw rate scale error per tick (fraction)")
+    v_add_std: float = param(0.0, ge=0, doc="std dev of additive linear speed noise per tick while moving (m/s)")
+    w_add_std: float = param(0.0, ge=0, doc="std dev of additive yaw rate noise per tick while moving (rad/s)")
+    scale_bias: float = param(0.0, doc="systematic wheel-radius error (fraction)")
+    w_bias: float = param(0.0, doc="gyro-like yaw drift while moving (rad/s)")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
     @classmethod
     def realistic(cls) -> OdomNoise:
@@ -60,7 +66,7 @@ class OdomNoise(BaseModel):
 
     @property
     def is_zero(self) -> bool:
-        return not any(self.model_dump().values())
+        return not any(dataclasses.astuple(self))
 
 
 @dataclass(frozen=True)
@@ -82,17 +88,17 @@ class Odometry:
         self._noisy = not noise.is_zero
         self.reset((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0)
 
-    def reset(self, odom_pose: Pose, true_pose: Pose, t: float) -> None:
-        self.pose: Pose = tuple(map(float, odom_pose))  # type: ignore[assignment]
-        self.last_true: Pose = tuple(map(float, true_pose))  # type: ignore[assignment]
+    def reset(self, odom_pose: Pose2D, true_pose: Pose2D, t: float) -> None:
+        self.pose: Pose2D = tuple(map(float, odom_pose))  # type: ignore[assignment]
+        self.last_true: Pose2D = tuple(map(float, true_pose))  # type: ignore[assignment]
         self.last_t = t
         self.v_gain, self.w_gain = 1.0, 1.0
 
-    def rebase(self, true_pose: Pose, t: float) -> None:
+    def rebase(self, true_pose: Pose2D, t: float) -> None:
         """The true pose jumped (teleport): do not integrate the jump."""
         self.last_true, self.last_t = tuple(map(float, true_pose)), t  # type: ignore[assignment]
 
-    def tick(self, true_pose: Pose, t: float) -> None:
+    def tick(self, true_pose: Pose2D, t: float) -> None:
         dt = t - self.last_t
         if dt <= 0:
             return
@@ -102,7 +108,7 @@ class Odometry:
         self.pose = compose(self.pose, delta)
         self.last_true, self.last_t = true_pose, t
 
-    def _corrupt(self, delta: Pose, dt: float) -> Pose:
+    def _corrupt(self, delta: Pose2D, dt: float) -> Pose2D:
         n, rng = self.noise, self.rng
         vx, vy, w = delta[0] / dt, delta[1] / dt, delta[2] / dt
         moving = math.hypot(vx, vy) > MOVING_EPS or abs(w) > MOVING_EPS
@@ -114,7 +120,7 @@ class Odometry:
         w_meas = w * self.w_gain + (aw + n.w_bias if moving else 0.0)
         return ((vx * self.v_gain + ax) * dt, (vy * self.v_gain + ay) * dt, w_meas * dt)
 
-    def state(self, true_pose: Pose, body_vel: tuple[float, float, float], t: float) -> OdomState:
+    def state(self, true_pose: Pose2D, body_vel: tuple[float, float, float], t: float) -> OdomState:
         """The last tick's pose extended by the (noise-free) motion since it, so a query between
         ticks is current; the extension is never integrated, so polling cannot change the drift."""
         p = compose(self.pose, relative(self.last_true, true_pose))

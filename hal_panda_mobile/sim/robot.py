@@ -1,85 +1,88 @@
-"""Robot description (config/panda_mobile.yaml) as a validated model.
+"""Robot description as plain frozen dataclasses: what the simulator needs of config/panda_mobile.yaml.
 
-The YAML is shared with navigation and SLAM, which may add keys of their own: unknown keys are
-ignored here rather than rejected, but every key the simulator uses is checked and named on error.
+Reading the YAML is :func:`hal_panda_mobile.files.load_robot_description`; ranges and defaults are declared
+here once (see :mod:`.spec`) and checked both when the file is validated and when Python builds one.
+Error messages name the field relative to the object (``beams: must be > 0``); the file layer prefixes
+the path (``lidar.beams``).
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from .errors import SimConfigError
+from .spec import check_ranges, param
 
-from robonix_nav_data import resources
-
-from .errors import SimConfigError, config_error
-
-DEFAULT_ROBOT_YAML = resources.robot_description()
+XY = tuple[float, float]
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="ignore", frozen=True)
+@dataclass(frozen=True)
+class BodySpec:
+    height: float = param(0.3, gt=0, doc="m, base box height")
+    mass: float = param(40.0, gt=0, doc="kg")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
 
-class BodySpec(_Model):
-    height: float = Field(0.3, gt=0)
-    mass: float = Field(40.0, gt=0)
-
-
-class KinematicsSpec(_Model):
+@dataclass(frozen=True)
+class KinematicsSpec:
     type: Literal["holonomic"] = "holonomic"
 
 
-class LimitsSpec(_Model):
-    max_vx: float = Field(gt=0)
-    max_vy: float = Field(gt=0)
-    max_wz: float = Field(gt=0)
-    max_ax: float = Field(gt=0)
-    max_ay: float = Field(gt=0)
-    max_aw: float = Field(gt=0)
+@dataclass(frozen=True)
+class LimitsSpec:
+    max_vx: float = param(gt=0, doc="m/s")
+    max_vy: float = param(gt=0, doc="m/s")
+    max_wz: float = param(gt=0, doc="rad/s")
+    max_ax: float = param(gt=0, doc="m/s^2")
+    max_ay: float = param(gt=0, doc="m/s^2")
+    max_aw: float = param(gt=0, doc="rad/s^2")
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
 
-class LidarSpec(_Model):
+@dataclass(frozen=True)
+class LidarSpec:
     frame: str = "laser"
     mount: tuple[float, float, float, float] = (0.0, 0.0, 0.35, 0.0)  # x, y, z, yaw in base_link
-    beams: int = Field(360, gt=0)
-    fov: float = Field(2 * math.pi, gt=0, le=2 * math.pi + 1e-9)
-    range_min: float = Field(0.05, ge=0)
-    range_max: float = Field(12.0, gt=0)
-    rate_hz: float = Field(10.0, gt=0)
-    noise_std: float = Field(0.0, ge=0)
-    dropout_prob: float = Field(0.0, ge=0, le=1)
+    beams: int = param(360, gt=0, doc="beams per sweep")
+    fov: float = param(2 * math.pi, gt=0, le=2 * math.pi + 1e-9, doc="rad, field of view")
+    range_min: float = param(0.05, ge=0, doc="m")
+    range_max: float = param(12.0, gt=0, doc="m")
+    rate_hz: float = param(10.0, gt=0, doc="sim-time Hz")
+    noise_std: float = param(0.0, ge=0, doc="m, Gaussian on valid returns")
+    dropout_prob: float = param(0.0, ge=0, le=1, doc="per beam, reported as +inf")
 
-    @model_validator(mode="after")
-    def _range_order(self) -> LidarSpec:
+    def __post_init__(self) -> None:
+        check_ranges(self)
         if self.range_max <= self.range_min:
-            raise ValueError(f"range_max ({self.range_max}) must be > range_min ({self.range_min})")
-        return self
+            raise SimConfigError(f"range_max ({self.range_max}) must be > range_min ({self.range_min})")
 
 
-class RobotDescription(_Model):
+@dataclass(frozen=True)
+class RobotDescription:
+    footprint: tuple[XY, ...]
+    limits: LimitsSpec
     name: str = "panda_mobile"
     base_frame: str = "base_link"
     odom_frame: str = "odom"
-    footprint: tuple[tuple[float, float], ...]
-    body: BodySpec = BodySpec()
-    kinematics: KinematicsSpec = KinematicsSpec()
-    limits: LimitsSpec
-    cmd_vel_timeout: float = Field(0.5, gt=0)
-    lidar: LidarSpec = LidarSpec()
+    body: BodySpec = field(default_factory=BodySpec)
+    kinematics: KinematicsSpec = field(default_factory=KinematicsSpec)
+    cmd_vel_timeout: float = param(0.5, gt=0, doc="s of sim time a cmd_vel is held")
+    lidar: LidarSpec = field(default_factory=LidarSpec)
 
-    @field_validator("footprint")
-    @classmethod
-    def _polygon(cls, v: tuple[tuple[float, float], ...]) -> tuple[tuple[float, float], ...]:
+    def __post_init__(self) -> None:
+        check_ranges(self)
+        v = self.footprint
         if len(v) < 3:
-            raise ValueError("needs at least 3 vertices")
+            raise SimConfigError("footprint: needs at least 3 vertices")
         xs, ys = [p[0] for p in v], [p[1] for p in v]
         if max(xs) - min(xs) <= 0 or max(ys) - min(ys) <= 0:
-            raise ValueError("polygon has zero area")
-        return v
+            raise SimConfigError("footprint: polygon has zero area")
 
     @property
     def footprint_box(self) -> tuple[float, float, float, float]:
@@ -92,22 +95,3 @@ class RobotDescription(_Model):
     def footprint_radius(self) -> float:
         """Circumscribed radius about base_link (what a beam must clear not to see the robot)."""
         return max(math.hypot(x, y) for x, y in self.footprint)
-
-
-def robot_from_dict(data: object, source: str = "robot description") -> RobotDescription:
-    if not isinstance(data, dict):
-        raise SimConfigError(f"{source}: must be a mapping, got {type(data).__name__}")
-    try:
-        return RobotDescription.model_validate(data)
-    except ValidationError as exc:
-        raise config_error(exc, prefix=f"{source}: ") from exc
-
-
-def load_robot_description(path: str | Path | None = None) -> RobotDescription:
-    """Read config/panda_mobile.yaml (or another file of the same shape)."""
-    path = Path(path) if path is not None else DEFAULT_ROBOT_YAML
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise SimConfigError(f"{path}: cannot read robot description: {exc}") from exc
-    return robot_from_dict(data, source=str(path))

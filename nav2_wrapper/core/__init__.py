@@ -1,8 +1,12 @@
-"""Navigation core: costmaps, planner, controller, checkers, recoveries, navigator. numpy/scipy/numba only."""
+"""Navigation core: costmaps, planner, controller, checkers, recoveries, navigator.
+
+Imports only numpy/scipy/numba and robonix_common (a test enforces it); robot description and params files
+are read by ``nav2_wrapper.robot_io`` and ``nav2_wrapper.params``, which pass the results in.
+"""
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, ControlOutput, HolonomicController
-from .costmap import Costmap, CostmapConfig, LaserScan, ObservationSource
+from .costmap import Costmap, CostmapConfig, ObservationSource, RangeScan
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint
 from .navigator import Command, GoalRecord, NavConfig, Navigator, NavigatorConfig, validate_goal
@@ -12,7 +16,7 @@ from .recoveries import RecoveryConfig, RecoverySequence
 __all__ = [
     "FREE", "INSCRIBED", "LETHAL", "NO_INFORMATION", "Command", "ControlOutput", "ControllerConfig", "Costmap",
     "CostmapConfig", "Footprint", "GlobalPlanner", "GoalChecker", "GoalCheckerConfig", "GoalRecord",
-    "HolonomicController", "LaserScan", "NavConfig", "Navigator", "NavigatorConfig", "ObservationSource",
-    "PlanResult", "PlannerConfig", "ProgressChecker", "ProgressCheckerConfig", "RecoveryConfig",
+    "HolonomicController", "NavConfig", "Navigator", "NavigatorConfig", "ObservationSource",
+    "PlanResult", "PlannerConfig", "ProgressChecker", "ProgressCheckerConfig", "RangeScan", "RecoveryConfig",
     "RecoverySequence", "inflation_cost", "validate_goal",
 ]

@@ -5,18 +5,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from robonix_common.geometry import wrap_angle
+from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 
 @dataclass
 class GoalCheckerConfig:
-    xy_goal_tolerance: float = 0.25
-    yaw_goal_tolerance: float = 0.25
-    stateful: bool = True   # once inside the xy tolerance, only the yaw is checked afterwards (Nav2 default)
-    # StoppedGoalChecker: the goal also needs the base nearly at rest (None = SimpleGoalChecker). Without it a
-    # goal is declared while the base still turns fast, and it comes to rest outside the yaw tolerance.
-    trans_stopped_velocity: float | None = None
-    rot_stopped_velocity: float | None = None
+    """Goal checker parameters (``controller_server.<goal checker>``)."""
+
+    xy_goal_tolerance: float = param(0.25, "distance to the goal that counts as reached", unit="m", gt=0)
+    yaw_goal_tolerance: float = param(0.25, "heading error that counts as reached", unit="rad", gt=0)
+    stateful: bool = param(True, "once inside the xy tolerance, only the yaw is checked afterwards")
+    # StoppedGoalChecker: the goal also needs the base nearly at rest. Without it a goal is declared while the
+    # base still turns fast, and it comes to rest outside the yaw tolerance. Set by the plugin, not a YAML key.
+    stopped: bool = False
+    trans_stopped_velocity: float = param(0.25, "StoppedGoalChecker: translation speed that counts as at rest",
+                                          unit="m/s", gt=0)
+    rot_stopped_velocity: float = param(0.25, "StoppedGoalChecker: rotation speed that counts as at rest",
+                                        unit="rad/s", gt=0)
 
 
 class GoalChecker:
@@ -27,7 +33,7 @@ class GoalChecker:
     def reset(self) -> None:
         self._xy_latched = False
 
-    def xy_reached(self, pose: tuple[float, float, float], goal: tuple[float, float, float]) -> bool:
+    def xy_reached(self, pose: Pose2D, goal: Pose2D) -> bool:
         if self._xy_latched:
             return True
         ok = math.hypot(pose[0] - goal[0], pose[1] - goal[1]) <= self.cfg.xy_goal_tolerance
@@ -35,24 +41,26 @@ class GoalChecker:
             self._xy_latched = True
         return ok
 
-    def is_goal_reached(self, pose: tuple[float, float, float], goal: tuple[float, float, float],
-                        vel: tuple[float, float, float] | None = None) -> bool:
+    def is_goal_reached(self, pose: Pose2D, goal: Pose2D, vel: tuple[float, float, float] | None = None) -> bool:
         """Within the xy and yaw tolerances and, for a stopped checker, with body velocity ``vel`` at rest."""
         if not self.xy_reached(pose, goal):
             return False
         if abs(float(wrap_angle(pose[2] - goal[2]))) > self.cfg.yaw_goal_tolerance:
             return False
         c = self.cfg
-        if vel is not None and c.trans_stopped_velocity is not None and \
-                math.hypot(vel[0], vel[1]) > c.trans_stopped_velocity:
-            return False
-        return vel is None or c.rot_stopped_velocity is None or abs(vel[2]) <= c.rot_stopped_velocity
+        if vel is None or not c.stopped:
+            return True
+        return math.hypot(vel[0], vel[1]) <= c.trans_stopped_velocity and abs(vel[2]) <= c.rot_stopped_velocity
 
 
 @dataclass
 class ProgressCheckerConfig:
-    required_movement_radius: float = 0.5
-    movement_time_allowance: float = 10.0
+    """SimpleProgressChecker parameters (``controller_server.<progress checker>``)."""
+
+    required_movement_radius: float = param(
+        0.5, "radius the robot must move out of within movement_time_allowance, or it counts as stuck", unit="m",
+        gt=0)
+    movement_time_allowance: float = param(10.0, "time allowed to move required_movement_radius", unit="s", gt=0)
 
 
 class ProgressChecker:
@@ -66,7 +74,7 @@ class ProgressChecker:
     def reset(self) -> None:
         self._anchor = None
 
-    def check(self, now: float, pose: tuple[float, float, float]) -> bool:
+    def check(self, now: float, pose: Pose2D) -> bool:
         """True while progressing; False once stuck for longer than the allowance."""
         if self._anchor is None or math.hypot(pose[0] - self._anchor[0], pose[1] - self._anchor[1]) > \
                 self.cfg.required_movement_radius:

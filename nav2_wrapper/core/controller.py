@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_common.geometry import wrap_angle
+from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 from .costmap import Costmap
 from .costs import LETHAL, NO_INFORMATION, distance_from_cost
@@ -29,34 +30,47 @@ from .footprint import Footprint
 
 @dataclass
 class ControllerConfig:
-    max_vel_x: float = 0.5
-    max_vel_y: float = 0.5
-    max_vel_theta: float = 1.9
-    acc_lim_x: float = 1.5
-    acc_lim_y: float = 1.5
-    acc_lim_theta: float = 3.0
-    desired_linear_vel: float = 0.5
-    lookahead_dist: float = 0.6
-    min_lookahead_dist: float = 0.3
-    max_lookahead_dist: float = 0.9
-    lookahead_time: float = 1.5
-    use_velocity_scaled_lookahead_dist: bool = True
-    approach_velocity_scaling_dist: float = 0.6
-    min_approach_linear_velocity: float = 0.05
-    use_cost_regulated_linear_velocity_scaling: bool = True
-    cost_scaling_dist: float = 0.6
-    cost_scaling_gain: float = 1.0
-    regulated_linear_scaling_min_speed: float = 0.15
-    rotation_gain: float = 2.5                 # wz = gain · yaw error (clamped)
-    allow_reversed_heading: bool = True        # front/back-symmetric footprint: align either end with the path
-    rotate_to_goal_dist: float = 0.5           # m: within this of the goal, turn toward the goal yaw
-    collision_check_time: float = 1.0          # s of forward simulation per candidate
-    tight_clearance: float = 0.15              # m beyond the circumscribed radius: closer obstacles = tight space
-    dense_time: float = 0.25                  # s simulated finely (what runs before the next check)
-    footprint_check_resolution: float = 0.05   # m; the costmap cell size the dense sampling resolves
-    passage_lookahead: float = 1.0             # m of path searched for a narrow passage to line the body up with
-    sim_dt: float = 0.1
-    footprint: Footprint = field(default_factory=Footprint.from_robot_yaml)
+    """The controller plugin's parameters (``controller_server.<controller>``); the footprint comes from the
+    robot description and is passed in, never read here."""
+
+    footprint: Footprint = field(kw_only=True)
+    max_vel_x: float = param(0.5, "body-frame speed limit along x", unit="m/s", gt=0)
+    max_vel_y: float = param(0.5, "body-frame speed limit along y (0: no sideways motion)", unit="m/s", ge=0)
+    max_vel_theta: float = param(1.9, "turn rate limit", unit="rad/s", gt=0)
+    acc_lim_x: float = param(1.5, "acceleration limit along x", unit="m/s^2", gt=0)
+    acc_lim_y: float = param(1.5, "acceleration limit along y", unit="m/s^2", gt=0)
+    acc_lim_theta: float = param(3.0, "angular acceleration limit (also caps turns so they can brake in time)",
+                                 unit="rad/s^2", gt=0)
+    desired_linear_vel: float = param(0.5, "cruise speed before regulation and the speed limit", unit="m/s", gt=0)
+    lookahead_dist: float = param(0.6, "carrot distance when use_velocity_scaled_lookahead_dist is false",
+                                  unit="m", gt=0)
+    min_lookahead_dist: float = param(0.3, "lower bound of the velocity-scaled carrot distance", unit="m", gt=0)
+    max_lookahead_dist: float = param(0.9, "upper bound of the velocity-scaled carrot distance", unit="m", gt=0)
+    lookahead_time: float = param(1.5, "velocity-scaled carrot distance = speed * this", unit="s", gt=0)
+    use_velocity_scaled_lookahead_dist: bool = param(True, "scale the carrot distance with the measured speed")
+    approach_velocity_scaling_dist: float = param(0.6, "slow down linearly within this distance of the path end",
+                                                  unit="m", gt=0)
+    min_approach_linear_velocity: float = param(0.05, "the approach slow-down does not go below this", unit="m/s",
+                                                ge=0)
+    use_cost_regulated_linear_velocity_scaling: bool = param(True, "slow down near obstacles (inflated cost)")
+    cost_scaling_dist: float = param(0.6, "slow down when the nearest obstacle is closer than this", unit="m", gt=0)
+    cost_scaling_gain: float = param(1.0, "speed factor = gain * obstacle distance / cost_scaling_dist", gt=0)
+    regulated_linear_scaling_min_speed: float = param(0.15, "the cost regulation does not go below this",
+                                                      unit="m/s", ge=0)
+    rotation_gain: float = param(2.5, "wz = gain * heading error (clamped)", unit="1/s", gt=0)
+    allow_reversed_heading: bool = param(
+        True, "front/back-symmetric footprint: either end may lead along the path")
+    rotate_to_goal_dist: float = param(0.5, "within this of the goal, turn toward the goal yaw", unit="m", ge=0)
+    collision_check_time: float = param(1.0, "forward simulation of each candidate command", unit="s", gt=0)
+    tight_clearance: float = param(
+        0.15, "obstacles closer than circumscribed radius + this make a narrow passage", unit="m", ge=0)
+    dense_time: float = param(0.25, "the first part of the simulation, sampled finely (runs before the next check)",
+                              unit="s", gt=0)
+    footprint_check_resolution: float = param(
+        0.05, "dense sampling keeps outline points within half this apart (the costmap cell size)", unit="m", gt=0)
+    passage_lookahead: float = param(1.0, "path searched for a narrow passage to line the body up with", unit="m",
+                                     ge=0)
+    sim_dt: float = param(0.1, "coarse step of the forward simulation", unit="s", gt=0)
 
 
 @dataclass
@@ -70,8 +84,8 @@ class ControlOutput:
 
 
 class HolonomicController:
-    def __init__(self, cfg: ControllerConfig | None = None) -> None:
-        self.cfg = cfg or ControllerConfig()
+    def __init__(self, cfg: ControllerConfig) -> None:
+        self.cfg = cfg
         self.speed_limit = 1.0     # fraction of the max velocities (Nav2 speed limit as a percentage / 100)
         self._points = self.cfg.footprint.outline_points(0.025)
         self.set_path(np.zeros((0, 2)))
@@ -102,14 +116,14 @@ class HolonomicController:
         self._idx = lo + int(np.argmin(d))
         return self._idx
 
-    def remaining(self, pose: tuple[float, float, float]) -> float:
+    def remaining(self, pose: Pose2D) -> float:
         if len(self.path) == 0:
             return 0.0
         i = self._closest(pose[0], pose[1])
         return float(self._cum[-1] - self._cum[i] + math.hypot(self.path[i, 0] - pose[0], self.path[i, 1] - pose[1]))
 
-    def compute(self, pose: tuple[float, float, float], vel: tuple[float, float, float],
-                goal: tuple[float, float, float], costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
+    def compute(self, pose: Pose2D, vel: tuple[float, float, float],
+                goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
         """One control step: pose in the costmap frame, vel = measured body (vx, vy, wz), dt since last step."""
         c = self.cfg
         x, y, th = (float(v) for v in pose)
@@ -143,7 +157,8 @@ class HolonomicController:
         if c.use_cost_regulated_linear_velocity_scaling:
             centre = int(costmap.cost_at(x, y, outside=0))
             if centre != NO_INFORMATION:
-                dobs = distance_from_cost(centre, costmap.cfg.footprint.inscribed_radius, costmap.cfg.cost_scaling_factor)
+                dobs = distance_from_cost(centre, costmap.cfg.footprint.inscribed_radius,
+                                          costmap.cfg.cost_scaling_factor)
                 if dobs < c.cost_scaling_dist:
                     v = max(v * c.cost_scaling_gain * dobs / c.cost_scaling_dist,
                             min(c.regulated_linear_scaling_min_speed, v))
@@ -214,7 +229,7 @@ class HolonomicController:
         cap = min(self.cfg.max_vel_theta, math.sqrt(2.0 * self.cfg.acc_lim_theta * abs(err)))
         return float(np.clip(self.cfg.rotation_gain * err, -cap, cap)) * self.speed_limit
 
-    def _choose(self, vm: NDArray[np.float64], targets: list[float], pose: tuple[float, float, float],
+    def _choose(self, vm: NDArray[np.float64], targets: list[float], pose: Pose2D,
                 vel: tuple[float, float, float], costmap: Costmap,
                 dt: float) -> tuple[tuple[float, float, float], bool]:
         """The first safe candidate in order of preference; candidates are simulated the way the pursuit
@@ -255,7 +270,7 @@ class HolonomicController:
             return (cs * wxv + sn * wyv, -sn * wxv + cs * wyv, wz), False
         return (0.0, 0.0, 0.0), True
 
-    def _escape(self, pose: tuple[float, float, float], aim: NDArray[np.float64], target: float,
+    def _escape(self, pose: Pose2D, aim: NDArray[np.float64], target: float,
                 costmap: Costmap) -> tuple[float, float, float] | None:
         """When nothing else is safe but the body is turned away from the heading it needs: a slow translation
         while turning to that heading that adds no lethal contact, preferring the direction of travel. It gets
@@ -290,7 +305,7 @@ class HolonomicController:
             out.append({int(v) for v in cells[costmap.costs.flat[cells] == LETHAL]})
         return out
 
-    def world_trajectory_hits(self, cands: NDArray[np.float64], pose: tuple[float, float, float],
+    def world_trajectory_hits(self, cands: NDArray[np.float64], pose: Pose2D,
                               costmap: Costmap, horizon: float | None = None) -> NDArray[np.bool_]:
         """For candidates (K, 4) = world-frame (vx, vy), wz and the rotation after which turning stops, whether
         the simulated footprint touches a lethal cell it does not already touch at the start (those are
@@ -319,7 +334,7 @@ class HolonomicController:
         dense = np.arange(1, int(math.ceil(min(c.dense_time, horizon) / ds)) + 1) * ds
         return np.unique(np.concatenate([dense, coarse]))
 
-    def _new_contacts(self, poses: NDArray[np.float64], pose: tuple[float, float, float],
+    def _new_contacts(self, poses: NDArray[np.float64], pose: Pose2D,
                       costmap: Costmap) -> NDArray[np.bool_]:
         """Per pose, whether the outline touches a lethal cell that the outline at ``pose`` does not touch."""
         pts = self._points
@@ -350,7 +365,7 @@ class HolonomicController:
         fc[fc == NO_INFORMATION] = 0.0
         return 1e4 * (fc == LETHAL).sum(axis=1) + fc.sum(axis=1)
 
-    def trajectory_hits(self, cands: NDArray[np.float64], pose: tuple[float, float, float],
+    def trajectory_hits(self, cands: NDArray[np.float64], pose: Pose2D,
                         costmap: Costmap, horizon: float | None = None) -> NDArray[np.bool_]:
         """For body-velocity candidates (K, 3) held constant (what the recoveries command), whether the
         forward-simulated footprint touches a lethal cell it is not already touching at the start."""

@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
+from robonix_common.params import param
 
 from .costs import FREE, INSCRIBED, LETHAL, NO_INFORMATION, inflation_cost
 from .footprint import Footprint
@@ -26,43 +28,46 @@ class ObservationSource:
 
     name: str = "scan"
     topic: str = "/scan"
-    marking: bool = True
-    clearing: bool = True
-    obstacle_max_range: float = 2.5
-    obstacle_min_range: float = 0.0
-    raytrace_max_range: float = 3.0
-    raytrace_min_range: float = 0.0
-    inf_is_valid: bool = False
+    marking: bool = param(True, "mark obstacles at the scan's returns")
+    clearing: bool = param(True, "clear cells along each beam up to its return")
+    obstacle_max_range: float = param(2.5, "returns farther than this are not marked", unit="m", gt=0)
+    obstacle_min_range: float = param(0.0, "returns closer than this are not marked", unit="m", ge=0)
+    raytrace_max_range: float = param(3.0, "beams clear up to this far", unit="m", gt=0)
+    raytrace_min_range: float = param(0.0, "beams clear from this far out", unit="m", ge=0)
+    inf_is_valid: bool = param(False, "a beam without a return (+inf) clears up to raytrace_max_range")
 
 
 @dataclass
 class CostmapConfig:
-    """Costmap + layer parameters; names follow Nav2 where Nav2 has the parameter."""
+    """Costmap + layer parameters; names follow Nav2 where Nav2 has the parameter. The footprint comes from the
+    robot description and is passed in, never read here."""
 
+    footprint: Footprint = field(kw_only=True)
     name: str = "global_costmap"
-    resolution: float = 0.05
-    rolling_window: bool = False
-    width: float = 5.0          # m; size of a rolling window (or of a static-less global costmap)
-    height: float = 5.0
-    origin_x: float = 0.0
-    origin_y: float = 0.0
-    static_layer: bool = True
-    obstacle_layer: bool = True
-    inflation_layer: bool = True
-    track_unknown_space: bool = True
-    lethal_cost_threshold: int = 100
-    unknown_cost_value: int = -1
-    trinary_costmap: bool = True
-    inflation_radius: float = 0.55
-    cost_scaling_factor: float = 10.0
-    inflate_unknown: bool = False
-    footprint: Footprint = field(default_factory=Footprint.from_robot_yaml)
+    resolution: float = param(0.05, "cell size (a global costmap takes the static map's)", unit="m", gt=0)
+    rolling_window: bool = param(False, "a window that moves with the robot (local costmap)")
+    width: float = param(5.0, "size of a rolling window (or of a global costmap without a static map)", unit="m",
+                         gt=0)
+    height: float = param(5.0, "see width", unit="m", gt=0)
+    origin_x: float = param(0.0, "origin of a fixed costmap without a static map", unit="m")
+    origin_y: float = param(0.0, "see origin_x", unit="m")
+    static_layer: bool = param(True, "use the static layer (its 'enabled' key)")
+    obstacle_layer: bool = param(True, "use the obstacle layer (its 'enabled' key; off without an active source)")
+    inflation_layer: bool = param(True, "use the inflation layer (its 'enabled' key)")
+    track_unknown_space: bool = param(True, "unknown map cells stay unknown (else free); Nav2's default is false")
+    lethal_cost_threshold: int = param(100, "map occupancy at or above this is lethal", ge=1, le=100)
+    unknown_cost_value: int = param(-1, "map value that means unknown")
+    trinary_costmap: bool = param(True, "map cells are free, lethal or unknown (no graded costs)")
+    inflation_radius: float = param(0.55, "inflate lethal cells this far", unit="m", gt=0)
+    cost_scaling_factor: float = param(10.0, "exponential decay of the inflated cost with distance", unit="1/m",
+                                       gt=0)
+    inflate_unknown: bool = param(False, "inflation also raises the cost of unknown cells")
     observation_sources: list[ObservationSource] = field(default_factory=lambda: [ObservationSource()])
 
 
 @dataclass
-class LaserScan:
-    """The fields of sensor_msgs/LaserScan the obstacle layer needs."""
+class RangeScan:
+    """The fields of a planar laser scan the obstacle layer needs (what a sensor_msgs/LaserScan carries)."""
 
     ranges: NDArray[np.float64]
     angle_min: float
@@ -224,7 +229,7 @@ class Costmap:
         self._recompute(0, rows, 0, cols)
 
     # ---- obstacle layer ---------------------------------------------------------------------------
-    def update_scan(self, scan: LaserScan, sensor_pose: NDArray | tuple[float, float, float]) -> None:
+    def update_scan(self, scan: RangeScan, sensor_pose: NDArray | Pose2D) -> None:
         """Ray-trace clearing then marking (Nav2 order) for every observation source, in the costmap frame."""
         if not self.cfg.obstacle_layer or not self.cfg.observation_sources:
             return

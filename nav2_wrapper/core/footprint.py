@@ -1,19 +1,16 @@
-"""Robot footprint: polygon, inscribed/circumscribed radii, and sample points for collision checks."""
+"""Robot footprint: polygon, inscribed/circumscribed radii, and sample points for collision checks.
+
+The polygon comes from the robot description, which ``nav2_wrapper.robot_io`` reads; the core never reads files.
+"""
 
 from __future__ import annotations
 
 import ast
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
-
-from robonix_nav_data import resources
-
-ROBOT_YAML = resources.robot_description()
 
 
 def _seg_dist(px: float, py: float, a: NDArray, b: NDArray) -> float:
@@ -38,12 +35,6 @@ class Footprint:
         self.inscribed_radius = min(_seg_dist(0.0, 0.0, self.polygon[i], self.polygon[(i + 1) % n])
                                     for i in range(n))
         self.circumscribed_radius = float(np.max(np.hypot(self.polygon[:, 0], self.polygon[:, 1])))
-
-    @classmethod
-    def from_robot_yaml(cls, path: str | Path = ROBOT_YAML) -> Footprint:
-        """The robot description is the single source of the footprint (robonix operator tip)."""
-        desc = yaml.safe_load(Path(path).read_text())
-        return cls(np.asarray(desc["footprint"], dtype=float))
 
     @classmethod
     def from_string(cls, text: str) -> Footprint:

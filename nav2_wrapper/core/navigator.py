@@ -15,50 +15,68 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robonix_common.geometry import Pose2D
 from robonix_common.grid import GridMap
+from robonix_common.params import param
 
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, HolonomicController
-from .costmap import Costmap, CostmapConfig, LaserScan
+from .costmap import Costmap, CostmapConfig, RangeScan
 from .costs import INSCRIBED, LETHAL
+from .footprint import Footprint
+from .mppi import MppiConfig, MppiController
 from .planner import GlobalPlanner, PlannerConfig, PlanResult
 from .recoveries import RecoveryConfig, RecoverySequence
 
 PENDING, RUNNING, SUCCEEDED, FAILED, CANCELED, IDLE = "PENDING", "RUNNING", "SUCCEEDED", "FAILED", "CANCELED", "IDLE"
 TERMINAL = (SUCCEEDED, FAILED, CANCELED)
-Pose = tuple[float, float, float]
 
 
 @dataclass
 class NavigatorConfig:
-    replan_frequency: float = 1.0          # Hz (Nav2 BT RateController)
-    controller_frequency: float = 20.0     # Hz; only used as the first step's dt
-    path_blocked_lookahead: float = 2.5    # m of path checked for new lethal/inscribed cells each tick
-    min_replan_interval: float = 0.25      # s between event-triggered replans
-    blocked_timeout: float = 2.0           # s the controller may find no safe command before recovering
-    pending_timeout: float = 30.0          # s a goal may wait for the first map + pose
-    input_grace_s: float = 5.0             # s a goal stays paused while a required input is lost (core/grace.py)
-    unknown_goal_margin: float = 10.0      # m a goal may lie beyond the current map when planning through unknown
-    global_frame: str = "map"
-    robot_base_frame: str = "base_link"
+    """The navigate-to-pose behaviour (``bt_navigator``, plus the controller rate from ``controller_server``)."""
+
+    replan_frequency: float = param(1.0, "replan rate (BT RateController); also at once on a blocked path",
+                                    unit="Hz", gt=0)
+    controller_frequency: float = param(20.0, "control loop rate", unit="Hz", gt=0)
+    path_blocked_lookahead: float = param(2.5, "path checked for new lethal/inscribed cells each tick", unit="m",
+                                          gt=0)
+    min_replan_interval: float = param(0.25, "minimum time between event-triggered replans", unit="s", ge=0)
+    blocked_timeout: float = param(2.0, "time the controller may find no safe command before a recovery",
+                                   unit="s", gt=0)
+    pending_timeout: float = param(30.0, "time a goal may wait for the first map and pose", unit="s", gt=0)
+    input_grace_s: float = param(5.0, "time a goal stays paused, robot stopped, while a required input is lost",
+                                 unit="s", ge=0, le=3600)
+    unknown_goal_margin: float = param(
+        10.0, "how far beyond the current map a goal may lie when planning through unknown space", unit="m", ge=0)
+    global_frame: str = param("map", "frame goals and plans are in (the provider's frames config wins)")
+    robot_base_frame: str = param("base_link", "robot base frame (the provider's frames config wins)")
 
 
-def _local_default() -> CostmapConfig:
-    return CostmapConfig(name="local_costmap", rolling_window=True, width=3.0, height=3.0, static_layer=False)
+def _local_default(footprint: Footprint) -> CostmapConfig:
+    return CostmapConfig(name="local_costmap", rolling_window=True, width=3.0, height=3.0, static_layer=False,
+                         footprint=footprint)
 
 
 @dataclass
 class NavConfig:
     """Everything the navigator needs; ``nav2_wrapper.params`` builds it from a Nav2 params profile."""
 
-    global_costmap: CostmapConfig = field(default_factory=CostmapConfig)
-    local_costmap: CostmapConfig = field(default_factory=_local_default)
+    global_costmap: CostmapConfig
+    local_costmap: CostmapConfig
+    controller: ControllerConfig
     planner: PlannerConfig = field(default_factory=PlannerConfig)
-    controller: ControllerConfig = field(default_factory=ControllerConfig)
     goal_checker: GoalCheckerConfig = field(default_factory=GoalCheckerConfig)
     progress_checker: ProgressCheckerConfig = field(default_factory=ProgressCheckerConfig)
     recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+    mppi: MppiConfig | None = None      # set: the MPPI controller; None: the holonomic pursuit controller
+
+    @classmethod
+    def defaults(cls, footprint: Footprint) -> NavConfig:
+        """Every parameter at its declared default, for the given robot footprint."""
+        return cls(CostmapConfig(footprint=footprint), _local_default(footprint),
+                   ControllerConfig(footprint=footprint))
 
 
 @dataclass
@@ -74,7 +92,7 @@ class Command:
 @dataclass
 class GoalRecord:
     run_id: str
-    goal: Pose
+    goal: Pose2D
     state: str = PENDING
     detail: str = "waiting to start"
     accepted: bool = True
@@ -90,20 +108,22 @@ def validate_goal(x: float, y: float, yaw: float, costmap: Costmap) -> str | Non
     c, r = costmap.world_to_cell(x, y)
     if not bool(costmap.in_bounds(c, r)):
         rows, cols = costmap.shape
-        return (f"goal ({x:.2f}, {y:.2f}) is off the map (x {costmap.origin_x:.2f}..{costmap.origin_x + cols * costmap.resolution:.2f}, "
-                f"y {costmap.origin_y:.2f}..{costmap.origin_y + rows * costmap.resolution:.2f})")
+        x1, y1 = costmap.origin_x + cols * costmap.resolution, costmap.origin_y + rows * costmap.resolution
+        return (f"goal ({x:.2f}, {y:.2f}) is off the map (x {costmap.origin_x:.2f}..{x1:.2f}, "
+                f"y {costmap.origin_y:.2f}..{y1:.2f})")
     if int(costmap.costs[int(r), int(c)]) == LETHAL:
         return f"goal ({x:.2f}, {y:.2f}) is inside an obstacle"
     return None
 
 
 class Navigator:
-    def __init__(self, cfg: NavConfig | None = None) -> None:
-        self.cfg = cfg or NavConfig()
+    def __init__(self, cfg: NavConfig) -> None:
+        self.cfg = cfg
         self.global_costmap = Costmap(self.cfg.global_costmap)
         self.local_costmap = Costmap(self.cfg.local_costmap)
         self.planner = GlobalPlanner(self.cfg.planner)
-        self.controller = HolonomicController(self.cfg.controller)
+        self.controller = (HolonomicController(self.cfg.controller) if self.cfg.mppi is None
+                           else MppiController(self.cfg.controller, self.cfg.mppi))
         self.goal_checker = GoalChecker(self.cfg.goal_checker)
         self.progress = ProgressChecker(self.cfg.progress_checker)
         self.recovery = RecoverySequence(self.cfg.recovery, self.clear_costmaps)
@@ -126,8 +146,9 @@ class Navigator:
         self.latest = rec
         if self._map is not None and all(math.isfinite(v) for v in (x, y)):
             self.global_costmap.set_static_map(self._global_map(self._map, [*self._goals(), (x, y)]))
+        finite = all(math.isfinite(v) for v in (x, y, yaw))
         reason = validate_goal(x, y, yaw, self.global_costmap) if self.has_map else (
-            None if all(math.isfinite(v) for v in (x, y, yaw)) else f"goal has non-finite coordinates ({x}, {y}, {yaw})")
+            None if finite else f"goal has non-finite coordinates ({x}, {y}, {yaw})")
         if reason:
             rec.accepted = False
             self._finish(rec, FAILED, f"rejected: {reason}", now)
@@ -181,8 +202,9 @@ class Navigator:
         self.local_costmap.clear()
 
     # ---- the tick ---------------------------------------------------------------------------------
-    def tick(self, now: float, pose: Pose, vel: Pose = (0.0, 0.0, 0.0), grid: GridMap | None = None,
-             scan: LaserScan | None = None, sensor_pose: Pose | None = None) -> Command:
+    def tick(self, now: float, pose: Pose2D, vel: tuple[float, float, float] = (0.0, 0.0, 0.0),
+             grid: GridMap | None = None, scan: RangeScan | None = None,
+             sensor_pose: Pose2D | None = None) -> Command:
         """Fold in new data, advance the active goal, and return the velocity command (body frame)."""
         dt = (now - self._last_tick) if self._last_tick is not None else 1.0 / self.cfg.navigator.controller_frequency
         self._last_tick = now
@@ -199,8 +221,8 @@ class Navigator:
             return self._zero(rec)
         return self._run(rec, now, pose, vel, dt)
 
-    def _update_costmaps(self, pose: Pose, grid: GridMap | None, scan: LaserScan | None,
-                         sensor_pose: Pose | None) -> None:
+    def _update_costmaps(self, pose: Pose2D, grid: GridMap | None, scan: RangeScan | None,
+                         sensor_pose: Pose2D | None) -> None:
         if grid is not None:
             self._map = grid
             self.global_costmap.set_static_map(self._global_map(grid, self._goals()))
@@ -212,7 +234,7 @@ class Navigator:
             self.global_costmap.update_scan(scan, sp)
             self.local_costmap.update_scan(scan, sp)
 
-    def _start(self, rec: GoalRecord, now: float, pose: Pose) -> bool:
+    def _start(self, rec: GoalRecord, now: float, pose: Pose2D) -> bool:
         if not self.has_map:
             if now - rec.started > self.cfg.navigator.pending_timeout:
                 self._finish(rec, FAILED, "no map received within "
@@ -235,7 +257,7 @@ class Navigator:
         rec.detail = f"running: {res.length:.2f} m path"
         return True
 
-    def _run(self, rec: GoalRecord, now: float, pose: Pose, vel: Pose, dt: float) -> Command:
+    def _run(self, rec: GoalRecord, now: float, pose: Pose2D, vel: tuple[float, float, float], dt: float) -> Command:
         nc = self.cfg.navigator
         if self.recovery.active is not None:
             step = self.recovery.step(now, pose, self.local_costmap, self.controller)
@@ -301,7 +323,7 @@ class Navigator:
         data = np.pad(grid.data, ((bottom, top), (left, right)), constant_values=-1)
         return GridMap(data, res, x0 - left * res, y0 - bottom * res, 0.0, grid.frame_id)
 
-    def _plan(self, pose: Pose, now: float) -> PlanResult:
+    def _plan(self, pose: Pose2D, now: float) -> PlanResult:
         goal = self.active.goal if self.active else pose
         res = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
         self._last_plan = now
@@ -311,13 +333,14 @@ class Navigator:
             self.controller.set_path(res.path)
         return res
 
-    def _path_blocked(self, pose: Pose) -> bool:
+    def _path_blocked(self, pose: Pose2D) -> bool:
         """New lethal/inscribed cells on the next stretch of the path (outside the start-escape zone)."""
         p = self.controller.path
         if len(p) == 0:
             return False
         i = max(self.controller._idx, 0)
-        j = int(np.searchsorted(self.controller._cum, self.controller._cum[i] + self.cfg.navigator.path_blocked_lookahead))
+        ahead = self.controller._cum[i] + self.cfg.navigator.path_blocked_lookahead
+        j = int(np.searchsorted(self.controller._cum, ahead))
         seg = p[i:j + 1]
         far = np.hypot(seg[:, 0] - pose[0], seg[:, 1] - pose[1]) > self.cfg.planner.escape_radius
         seg = seg[far]
@@ -327,7 +350,7 @@ class Navigator:
         cl = self.local_costmap.cost_at(seg[:, 0], seg[:, 1], outside=0)
         return bool(np.any(((c >= INSCRIBED) & (c <= LETHAL)) | ((cl >= INSCRIBED) & (cl <= LETHAL))))
 
-    def _recover(self, rec: GoalRecord, now: float, pose: Pose, why: str) -> Command:
+    def _recover(self, rec: GoalRecord, now: float, pose: Pose2D, why: str) -> Command:
         beh = self.recovery.begin(now, pose)
         if beh is None:
             self._finish(rec, FAILED, f"{why}; gave up after {rec.recoveries} recoveries", now)

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from robonix_common.params import param
+
 from . import _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
@@ -19,14 +21,21 @@ from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 
 @dataclass
 class PlannerConfig:
-    tolerance: float = 0.5              # m: accept the nearest reachable cell this close to a blocked goal
-    allow_unknown: bool = True
-    cost_travel_multiplier: float = 2.0
-    unknown_cost: int = 200             # cost an unknown cell is charged at (0..252)
-    smooth_path: bool = True
-    smoothing_slack: float = 0.02       # a shortcut may cost this fraction more than the sub-path it replaces
-    escape_radius: float = 0.35         # m: how far a start inside the inscribed band may move through it
-    heuristic_weight: float = 1.25      # weighted A*: cost ≤ 1.25 × optimal (measured median 1.03–1.06); ~5x fewer expansions
+    """The planner plugin's parameters (``planner_server.<plugin>`` in a params profile)."""
+
+    tolerance: float = param(0.5, "accept the nearest reachable cell this close to a blocked goal", unit="m", ge=0)
+    allow_unknown: bool = param(True, "plan through unknown cells (charged at unknown_cost)")
+    cost_travel_multiplier: float = param(
+        2.0, "traversal cost per unit length is 1 + multiplier * cost / 252 (0: shortest path)", ge=0)
+    unknown_cost: int = param(200, "cost an unknown cell is charged at", ge=0, le=252)
+    smooth_path: bool = param(True, "shortcut the grid path Theta*-style where the straight line costs no more")
+    smoothing_slack: float = param(
+        0.02, "a shortcut may cost this fraction more than the sub-path it replaces", ge=0)
+    escape_radius: float = param(0.35, "how far a start inside the inscribed band may move through it", unit="m",
+                                 ge=0)
+    heuristic_weight: float = param(
+        1.25, "weighted A*: path cost <= weight * optimal (1.25: measured median 1.03-1.06, ~5x fewer expansions)",
+        ge=1.0)
 
 
 @dataclass

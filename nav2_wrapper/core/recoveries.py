@@ -9,27 +9,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robonix_common.geometry import wrap_angle
+from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
 
 from .controller import HolonomicController
 from .costmap import Costmap
 
-Pose = tuple[float, float, float]
+BEHAVIORS = ("clear_costmaps", "spin", "wait", "backup")
 
 
 @dataclass
 class RecoveryConfig:
-    number_of_retries: int = 6               # Nav2 navigate_to_pose BT RecoveryNode default
-    behaviors: tuple[str, ...] = ("clear_costmaps", "spin", "wait", "backup")
-    spin_dist: float = 1.57
-    max_rotational_vel: float = 1.0
-    min_rotational_vel: float = 0.4
-    rotational_acc_lim: float = 3.2
-    wait_duration: float = 5.0
-    backup_dist: float = 0.30
-    backup_speed: float = 0.05
-    time_allowance: float = 10.0
-    simulate_ahead_time: float = 2.0
+    """Recovery parameters: the sequence from ``bt_navigator``, the motion limits from ``behavior_server``."""
+
+    number_of_retries: int = param(6, "recoveries a goal may use before it fails (BT RecoveryNode)", ge=0)
+    behaviors: tuple[str, ...] = param(BEHAVIORS, "recoveries run round-robin, in this order", choices=BEHAVIORS)
+    spin_dist: float = param(1.57, "angle a spin turns", unit="rad", gt=0)
+    max_rotational_vel: float = param(1.0, "spin turn rate limit", unit="rad/s", gt=0)
+    min_rotational_vel: float = param(0.4, "spin turn rate floor", unit="rad/s", gt=0)
+    rotational_acc_lim: float = param(3.2, "spin deceleration used to stop at spin_dist", unit="rad/s^2", gt=0)
+    wait_duration: float = param(5.0, "how long a wait recovery stands still", unit="s", ge=0)
+    backup_dist: float = param(0.30, "distance a backup moves away from what blocks the robot", unit="m", gt=0)
+    backup_speed: float = param(0.05, "backup speed", unit="m/s", gt=0)
+    time_allowance: float = param(10.0, "a spin or backup that takes longer fails", unit="s", gt=0)
+    simulate_ahead_time: float = param(2.0, "collision look-ahead of spin and backup", unit="s", gt=0)
 
 
 @dataclass
@@ -49,10 +52,10 @@ class Behavior:
         self.cfg = cfg
         self.t0 = 0.0
 
-    def start(self, now: float, pose: Pose) -> None:
+    def start(self, now: float, pose: Pose2D) -> None:
         self.t0 = now
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         raise NotImplementedError
 
     def _timed_out(self, now: float) -> bool:
@@ -66,7 +69,7 @@ class ClearCostmaps(Behavior):
         super().__init__(cfg)
         self._clear = clear
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         self._clear()
         return Step(done=True, detail="cleared local and global costmaps")
 
@@ -74,11 +77,11 @@ class ClearCostmaps(Behavior):
 class Spin(Behavior):
     name = "spin"
 
-    def start(self, now: float, pose: Pose) -> None:
+    def start(self, now: float, pose: Pose2D) -> None:
         super().start(now, pose)
         self._last, self._turned = pose[2], 0.0
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         c = self.cfg
         self._turned += abs(float(wrap_angle(pose[2] - self._last)))
         self._last = pose[2]
@@ -97,7 +100,7 @@ class Spin(Behavior):
 class Wait(Behavior):
     name = "wait"
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         if now - self.t0 >= self.cfg.wait_duration:
             return Step(done=True, detail=f"waited {self.cfg.wait_duration:.1f} s")
         return Step()
@@ -112,12 +115,12 @@ class BackUp(Behavior):
     #: Candidate directions (body frame, rad), in order of preference: back, oblique back, sideways, oblique.
     DIRECTIONS = tuple(math.radians(a) for a in (180, 135, -135, 90, -90, 45, -45))
 
-    def start(self, now: float, pose: Pose) -> None:
+    def start(self, now: float, pose: Pose2D) -> None:
         super().start(now, pose)
         self._origin = (pose[0], pose[1])
         self._dir: tuple[float, float] | None = None
 
-    def _choose(self, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> tuple[float, float] | None:
+    def _choose(self, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> tuple[float, float] | None:
         c = self.cfg
         cands = np.array([[c.backup_speed * math.cos(a), c.backup_speed * math.sin(a), 0.0] for a in self.DIRECTIONS])
         horizon = min(c.simulate_ahead_time, c.backup_dist / c.backup_speed)
@@ -133,7 +136,7 @@ class BackUp(Behavior):
                 best = k
         return None if best is None else (float(cands[best, 0]), float(cands[best, 1]))
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         c = self.cfg
         moved = math.hypot(pose[0] - self._origin[0], pose[1] - self._origin[1])
         if moved >= c.backup_dist:
@@ -173,7 +176,7 @@ class RecoverySequence:
     def exhausted(self) -> bool:
         return self.used >= self.cfg.number_of_retries
 
-    def begin(self, now: float, pose: Pose) -> Behavior | None:
+    def begin(self, now: float, pose: Pose2D) -> Behavior | None:
         """Start the next behaviour, or None when the budget is spent."""
         if self.exhausted or not self._behaviors:
             return None
@@ -184,7 +187,7 @@ class RecoverySequence:
         self.active.start(now, pose)
         return self.active
 
-    def step(self, now: float, pose: Pose, costmap: Costmap, ctrl: HolonomicController) -> Step:
+    def step(self, now: float, pose: Pose2D, costmap: Costmap, ctrl: HolonomicController) -> Step:
         if self.active is None:
             return Step(done=True, ok=False, detail="no recovery running")
         s = self.active.step(now, pose, costmap, ctrl)

@@ -34,6 +34,28 @@ def _static(name: str) -> bytes:
     return resources.files("rbnx.dashboard").joinpath("static", name).read_bytes()
 
 
+async def _body(request: Request) -> dict[str, Any]:
+    """The request's JSON object, or DashboardError (answered 400)."""
+    try:
+        body = await request.json()
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise DashboardError("body: must be a JSON object") from None
+    if not isinstance(body, dict):
+        raise DashboardError("body: must be a JSON object")
+    return body
+
+def _action(fn: Any) -> Any:
+    """A POST handler that runs ``fn(body)`` off the event loop and answers its result as JSON."""
+    async def handler(request: Request) -> Response:
+        try:
+            body = await _body(request)
+            result = await asyncio.to_thread(fn, body)
+        except DashboardError as exc:
+            return JSONResponse({"error": str(exc)}, status_code=400)
+        return JSONResponse(result)
+    return handler
+
+
 def build_app(state: LiveState) -> Starlette:
     pages = {path: (_static(name), mime) for path, (name, mime) in STATIC.items()}
 
@@ -47,25 +69,6 @@ def build_app(state: LiveState) -> Starlette:
             return JSONResponse({"error": "no map yet"}, status_code=404)
         return Response(img.png, media_type="image/png",
                         headers={"Cache-Control": "no-store", "X-Map-Version": str(img.version)})
-
-    async def _body(request: Request) -> dict[str, Any]:
-        try:
-            body = await request.json()
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            raise DashboardError("body: must be a JSON object") from None
-        if not isinstance(body, dict):
-            raise DashboardError("body: must be a JSON object")
-        return body
-
-    def _action(fn: Any) -> Any:
-        async def handler(request: Request) -> Response:
-            try:
-                body = await _body(request)
-                result = await asyncio.to_thread(fn, body)
-            except DashboardError as exc:
-                return JSONResponse({"error": str(exc)}, status_code=400)
-            return JSONResponse(result)
-        return handler
 
     def goal(body: dict[str, Any]) -> dict[str, Any]:
         missing = [k for k in ("x", "y") if k not in body]

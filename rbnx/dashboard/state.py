@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 
 from rbnx.atlas_rpc import CMD, STATE_NAMES, Atlas, AtlasError, Driver, driver_capability
-from rbnx.demo_boot import DemoError
-from rbnx.demo_goals import TERMINAL, Goal
-from rbnx.demo_rpc import DemoRpc
+from rbnx.demo.boot import DemoError
+from rbnx.demo.goals import TERMINAL, Goal
+from rbnx.demo.rpc import DemoRpc
 
 log = logging.getLogger(__name__)
 MAX_PLAN_POINTS = 400

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rbnx.atlas_rpc import CMD, STATE_NAMES, Atlas, AtlasError, Driver, DriverReply, driver_capability
-from rbnx.backoff import Backoff
+from rbnx.boot.backoff import Backoff
 from robonix_api import telemetry
 
 DEFERRED_RETRY_S = 60.0  # how long configure/reset retry a Deferred INIT (an input that is briefly away)

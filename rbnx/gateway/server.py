@@ -302,8 +302,8 @@ class Gateway:
         entry, dot, _ = name.partition(".")
         entries = sorted({t.provider for t in self._tools.values()})
         if not dot:
-            return (f"unknown tool {name!r}: provider tools are <entry>.<tool> (entries: {', '.join(entries) or 'none'}); "
-                    f"lifecycle tools: {', '.join(LIFECYCLE_TOOLS)}")
+            return (f"unknown tool {name!r}: provider tools are <entry>.<tool> "
+                    f"(entries: {', '.join(entries) or 'none'}); lifecycle tools: {', '.join(LIFECYCLE_TOOLS)}")
         if entry not in entries:
             return f"unknown entry {entry!r} in tool {name!r}; known entries with tools: {', '.join(entries) or 'none'}"
         mine = sorted(t.name for t in self._tools.values() if t.provider == entry)

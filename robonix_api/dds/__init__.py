@@ -52,7 +52,8 @@ from robonix_api.dds.validate import validate_message
 
 __all__ = [
     "Clock", "ClockPublisher", "ConnectivityError", "DdsConfigError", "DdsNode", "Duration", "ExtrapolationError",
-    "FrameNotFoundError", "Header", "LaserScan", "MapLifecycle", "MapMetaData", "OccupancyGrid", "Odometry", "Path", "Point",
+    "FrameNotFoundError", "Header", "LaserScan", "MapLifecycle", "MapMetaData", "OccupancyGrid", "Odometry", "Path",
+    "Point",
     "Point32", "Polygon", "PolygonStamped", "Pose", "Pose2D", "PoseStamped", "PoseWithCovariance",
     "PoseWithCovarianceStamped", "Publisher", "QOS_NAMES", "Quaternion", "SimClock", "StaticTfBroadcaster",
     "Subscription", "TFMessage", "TfBroadcaster", "TfBuffer", "TfError", "Time", "Transform", "Transform3",

@@ -15,6 +15,7 @@ from robonix_api.dds.messages import Clock, Time
 
 
 class SimClock:
+    """The time a provider runs on: the latest /clock with ``use_sim_time``, else the wall clock."""
     def __init__(self, node: object | None, use_sim_time: bool) -> None:
         self.use_sim_time = bool(use_sim_time)
         self._t = 0.0
@@ -42,10 +43,12 @@ class SimClock:
             return self._t
 
     def now_msg(self) -> Time:
+        """``now()`` as a ROS ``builtin_interfaces/Time`` for message headers."""
         return Time.from_sec(self.now())
 
     @property
     def ticked(self) -> bool:
+        """Whether time is known: a /clock arrived (always true on wall time)."""
         return self._ticked or not self.use_sim_time
 
     def wait_for_first_tick(self, timeout: float | None = None) -> bool:
@@ -68,9 +71,11 @@ class SimClock:
             return self._cv.wait_for(lambda: self._t >= t, timeout)
 
     def sleep(self, dt: float, timeout: float | None = None) -> bool:
+        """Sleep ``dt`` seconds of this clock's time; False when ``timeout`` (wall s) ran out first."""
         return self.sleep_until(self.now() + dt, timeout)
 
     def close(self) -> None:
+        """Stop listening to /clock."""
         if self._sub is not None:
             self._sub.close()
             self._sub = None
@@ -83,7 +88,9 @@ class ClockPublisher:
         self._pub = node.create_publisher("/clock", Clock, "clock")
 
     def publish(self, t: float) -> None:
+        """Publish simulated time ``t`` (seconds) on /clock."""
         self._pub.publish(Clock(clock=Time.from_sec(t)))
 
     def close(self) -> None:
+        """Stop publishing /clock."""
         self._pub.close()

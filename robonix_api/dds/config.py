@@ -99,7 +99,8 @@ def resolve_config() -> tuple[str, str, list[tuple[str, ET.Element]]]:
         raise DdsConfigError(f"CYCLONEDDS_URI={uri!r} names no configuration")
     for label, root in parsed:
         if label != "inline XML" and _local(root.tag) not in ("CycloneDDS", "Domain"):
-            raise DdsConfigError(f"Cyclone DDS config {label}: root element must be <CycloneDDS>, got <{_local(root.tag)}>")
+            raise DdsConfigError(f"Cyclone DDS config {label}: root element must be <CycloneDDS>, "
+                                 f"got <{_local(root.tag)}>")
     return uri, source, parsed
 
 

@@ -28,10 +28,12 @@ from robonix_common.grid import GridMap
 
 
 def to_time(stamp: float | Time) -> Time:
+    """Seconds (or a Time already) as a ROS Time."""
     return stamp if isinstance(stamp, Time) else Time.from_sec(float(stamp))
 
 
 def header(stamp: float | Time, frame_id: str) -> Header:
+    """A ROS Header with ``stamp`` (seconds or Time) and ``frame_id``."""
     return Header(stamp=to_time(stamp), frame_id=frame_id)
 
 
@@ -81,19 +83,23 @@ def msg_to_grid(msg: OccupancyGrid) -> GridMap:
 
 # --- poses -----------------------------------------------------------------------------------------
 def xyyaw_to_pose(x: float, y: float, yaw: float) -> Pose:
+    """A planar pose as a ROS Pose (z = 0, rotation about z only)."""
     return Pose(position=Point(float(x), float(y), 0.0), orientation=Quaternion(*yaw_to_quat(float(yaw))))
 
 
 def pose_to_xyyaw(p: Pose) -> tuple[float, float, float]:
+    """A ROS Pose projected to the plane: x, y and the yaw of its orientation."""
     o = p.orientation
     return p.position.x, p.position.y, quat_to_yaw(o.x, o.y, o.z, o.w)
 
 
 def pose_stamped(x: float, y: float, yaw: float, stamp: float | Time = 0.0, frame_id: str = "map") -> PoseStamped:
+    """A planar pose as a ROS PoseStamped in ``frame_id``."""
     return PoseStamped(header=header(stamp, frame_id), pose=xyyaw_to_pose(x, y, yaw))
 
 
 def twist(vx: float = 0.0, vy: float = 0.0, wz: float = 0.0) -> Twist:
+    """A planar velocity (vx, vy, wz) as a ROS Twist."""
     return Twist(linear=Vector3(float(vx), float(vy), 0.0), angular=Vector3(0.0, 0.0, float(wz)))
 
 

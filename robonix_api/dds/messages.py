@@ -34,6 +34,7 @@ def _i8() -> np.ndarray:
 @final
 @dataclass
 class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+    """builtin_interfaces/Time: seconds and nanoseconds."""
     sec: int32 = 0
     nanosec: uint32 = 0
 
@@ -44,16 +45,19 @@ class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
         return cls(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
     def to_sec(self) -> float:
+        """The time in float seconds."""
         return self.sec + self.nanosec * 1e-9
 
 
 @final
 @dataclass
 class Duration(IdlStruct, typename="builtin_interfaces::msg::dds_::Duration_"):
+    """builtin_interfaces/Duration: seconds and nanoseconds."""
     sec: int32 = 0
     nanosec: uint32 = 0
 
     def to_sec(self) -> float:
+        """The duration in float seconds."""
         return self.sec + self.nanosec * 1e-9
 
 
@@ -61,6 +65,7 @@ class Duration(IdlStruct, typename="builtin_interfaces::msg::dds_::Duration_"):
 @final
 @dataclass
 class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    """std_msgs/Header: stamp and frame of the data that follows."""
     stamp: Time = field(default_factory=Time)
     frame_id: str = ""
 
@@ -69,6 +74,7 @@ class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
 @final
 @dataclass
 class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
+    """geometry_msgs/Point (float64)."""
     x: float64 = 0.0
     y: float64 = 0.0
     z: float64 = 0.0
@@ -77,6 +83,7 @@ class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
 @final
 @dataclass
 class Point32(IdlStruct, typename="geometry_msgs::msg::dds_::Point32_"):
+    """geometry_msgs/Point32 (float32, for polygons)."""
     x: float32 = 0.0
     y: float32 = 0.0
     z: float32 = 0.0
@@ -85,6 +92,7 @@ class Point32(IdlStruct, typename="geometry_msgs::msg::dds_::Point32_"):
 @final
 @dataclass
 class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    """geometry_msgs/Vector3."""
     x: float64 = 0.0
     y: float64 = 0.0
     z: float64 = 0.0
@@ -93,6 +101,7 @@ class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
 @final
 @dataclass
 class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    """geometry_msgs/Quaternion (x, y, z, w; identity by default)."""
     x: float64 = 0.0
     y: float64 = 0.0
     z: float64 = 0.0
@@ -102,6 +111,7 @@ class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
 @final
 @dataclass
 class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
+    """geometry_msgs/Pose: position and orientation."""
     position: Point = field(default_factory=Point)
     orientation: Quaternion = field(default_factory=Quaternion)
 
@@ -109,6 +119,7 @@ class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
 @final
 @dataclass
 class Pose2D(IdlStruct, typename="geometry_msgs::msg::dds_::Pose2D_"):
+    """geometry_msgs/Pose2D: x, y, theta."""
     x: float64 = 0.0
     y: float64 = 0.0
     theta: float64 = 0.0
@@ -117,6 +128,7 @@ class Pose2D(IdlStruct, typename="geometry_msgs::msg::dds_::Pose2D_"):
 @final
 @dataclass
 class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
+    """geometry_msgs/PoseStamped: a pose in a frame at a time."""
     header: Header = field(default_factory=Header)
     pose: Pose = field(default_factory=Pose)
 
@@ -124,6 +136,7 @@ class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
 @final
 @dataclass
 class PoseWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWithCovariance_"):
+    """geometry_msgs/PoseWithCovariance: a pose and its 6x6 row-major covariance."""
     pose: Pose = field(default_factory=Pose)
     covariance: array[float64, 36] = field(default_factory=_cov)
 
@@ -131,6 +144,7 @@ class PoseWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWith
 @final
 @dataclass
 class PoseWithCovarianceStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWithCovarianceStamped_"):
+    """geometry_msgs/PoseWithCovarianceStamped (what /initialpose carries)."""
     header: Header = field(default_factory=Header)
     pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
 
@@ -138,6 +152,7 @@ class PoseWithCovarianceStamped(IdlStruct, typename="geometry_msgs::msg::dds_::P
 @final
 @dataclass
 class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
+    """geometry_msgs/Twist: linear and angular velocity (what /cmd_vel carries)."""
     linear: Vector3 = field(default_factory=Vector3)
     angular: Vector3 = field(default_factory=Vector3)
 
@@ -145,6 +160,7 @@ class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
 @final
 @dataclass
 class TwistStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TwistStamped_"):
+    """geometry_msgs/TwistStamped: a velocity in a frame at a time."""
     header: Header = field(default_factory=Header)
     twist: Twist = field(default_factory=Twist)
 
@@ -152,6 +168,7 @@ class TwistStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TwistStamped_"
 @final
 @dataclass
 class TwistWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::TwistWithCovariance_"):
+    """geometry_msgs/TwistWithCovariance: a velocity and its 6x6 covariance."""
     twist: Twist = field(default_factory=Twist)
     covariance: array[float64, 36] = field(default_factory=_cov)
 
@@ -159,6 +176,7 @@ class TwistWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::TwistWi
 @final
 @dataclass
 class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
+    """geometry_msgs/Transform: translation and rotation."""
     translation: Vector3 = field(default_factory=Vector3)
     rotation: Quaternion = field(default_factory=Quaternion)
 
@@ -166,6 +184,7 @@ class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
 @final
 @dataclass
 class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
+    """geometry_msgs/TransformStamped: parent frame (header), child frame and the transform."""
     header: Header = field(default_factory=Header)
     child_frame_id: str = ""
     transform: Transform = field(default_factory=Transform)
@@ -174,12 +193,14 @@ class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformS
 @final
 @dataclass
 class Polygon(IdlStruct, typename="geometry_msgs::msg::dds_::Polygon_"):
+    """geometry_msgs/Polygon: a closed outline (footprints)."""
     points: sequence[Point32] = field(default_factory=list)
 
 
 @final
 @dataclass
 class PolygonStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PolygonStamped_"):
+    """geometry_msgs/PolygonStamped: a polygon in a frame at a time."""
     header: Header = field(default_factory=Header)
     polygon: Polygon = field(default_factory=Polygon)
 
@@ -188,6 +209,7 @@ class PolygonStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PolygonStamp
 @final
 @dataclass
 class Odometry(IdlStruct, typename="nav_msgs::msg::dds_::Odometry_"):
+    """nav_msgs/Odometry: pose in the odom frame and twist in the child frame, with covariances."""
     header: Header = field(default_factory=Header)
     child_frame_id: str = ""
     pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
@@ -197,6 +219,7 @@ class Odometry(IdlStruct, typename="nav_msgs::msg::dds_::Odometry_"):
 @final
 @dataclass
 class MapMetaData(IdlStruct, typename="nav_msgs::msg::dds_::MapMetaData_"):
+    """nav_msgs/MapMetaData: load time, resolution, size and origin of a grid."""
     map_load_time: Time = field(default_factory=Time)
     resolution: float32 = 0.0
     width: uint32 = 0
@@ -207,6 +230,7 @@ class MapMetaData(IdlStruct, typename="nav_msgs::msg::dds_::MapMetaData_"):
 @final
 @dataclass
 class OccupancyGrid(IdlStruct, typename="nav_msgs::msg::dds_::OccupancyGrid_"):
+    """nav_msgs/OccupancyGrid: row-major cells, -1 unknown, 0..100 occupancy."""
     header: Header = field(default_factory=Header)
     info: MapMetaData = field(default_factory=MapMetaData)
     data: sequence[int8] = field(default_factory=_i8)
@@ -215,6 +239,7 @@ class OccupancyGrid(IdlStruct, typename="nav_msgs::msg::dds_::OccupancyGrid_"):
 @final
 @dataclass
 class Path(IdlStruct, typename="nav_msgs::msg::dds_::Path_"):
+    """nav_msgs/Path: a planned path as stamped poses."""
     header: Header = field(default_factory=Header)
     poses: sequence[PoseStamped] = field(default_factory=list)
 
@@ -223,6 +248,7 @@ class Path(IdlStruct, typename="nav_msgs::msg::dds_::Path_"):
 @final
 @dataclass
 class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
+    """sensor_msgs/LaserScan: one sweep of ranges (and intensities) with its angles and limits."""
     header: Header = field(default_factory=Header)
     angle_min: float32 = 0.0
     angle_max: float32 = 0.0
@@ -239,12 +265,14 @@ class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
 @final
 @dataclass
 class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
+    """tf2_msgs/TFMessage: what /tf and /tf_static carry."""
     transforms: sequence[TransformStamped] = field(default_factory=list)
 
 
 @final
 @dataclass
 class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
+    """rosgraph_msgs/Clock: what /clock carries (simulated time)."""
     clock: Time = field(default_factory=Time)
 
 

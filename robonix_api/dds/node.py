@@ -95,6 +95,7 @@ class Publisher(Generic[M]):
                                                      writer_qos(qos))
 
     def publish(self, msg: M) -> None:
+        """Write ``msg`` on the topic; RuntimeError when closed, TypeError for a message of the wrong type."""
         if self._writer is None:
             raise RuntimeError(f"publisher on {self.topic} is closed")
         if not isinstance(msg, self.msg_type):
@@ -109,6 +110,7 @@ class Publisher(Generic[M]):
         return 0 if self._writer is None else len(self._writer.get_matched_subscriptions())
 
     def wait_for_subscribers(self, count: int = 1, timeout_s: float = 5.0) -> bool:
+        """Wait until ``count`` readers matched (True) or ``timeout_s`` passed (False)."""
         deadline = time.monotonic() + timeout_s
         while self.matched_count() < count:
             if time.monotonic() > deadline:
@@ -117,6 +119,7 @@ class Publisher(Generic[M]):
         return True
 
     def close(self) -> None:
+        """Delete the writer; later ``publish`` calls raise."""
         w, self._writer = self._writer, None
         if w is not None:
             self._node._forget(self)
@@ -219,9 +222,11 @@ class Subscription(Generic[M]):
                     log.exception("callback for %s raised", self.topic)
 
     def matched_count(self) -> int:
+        """How many writers this reader is matched with (0 once closed)."""
         return 0 if self._reader is None else len(self._reader.get_matched_publications())
 
     def close(self) -> None:
+        """Delete the reader; no callback runs after this returns."""
         if self._reader is None:
             return
         with self._node._dispatch_lock:
@@ -273,6 +278,7 @@ class DdsNode:
 
     def create_publisher(self, topic: str, msg_type: type[M], qos: str | Qos = "reliable",
                          depth: int | None = None) -> Publisher[M]:
+        """A writer on ``topic`` for ``msg_type`` with a QoS preset (or Qos) and optional history depth."""
         self._check_open()
         pub = Publisher(self, topic, msg_type, resolve_qos(qos, depth))
         with self._lock:
@@ -282,6 +288,8 @@ class DdsNode:
     def create_subscription(self, topic: str, msg_type: type[M], callback: Callable[[M], Any],
                             qos: str | Qos = "best_effort", depth: int | None = None,
                             on_liveliness: LivelinessCallback | None = None) -> Subscription[M]:
+        """A reader on ``topic`` that calls ``callback(msg)`` for each sample (and ``on_liveliness`` when writers come
+        and go)."""
         self._check_open()
         sub = Subscription(self, topic, msg_type, callback, resolve_qos(qos, depth), on_liveliness)
         self._ensure_dispatcher()
@@ -304,10 +312,8 @@ class DdsNode:
     def _wake(self) -> None:
         guard = self._guard
         if guard is not None and not self._closed:
-            try:
+            with contextlib.suppress(DDSException):  # closing concurrently: nobody is left to wake
                 guard.set(True)
-            except DDSException:  # closing concurrently: nobody is left to wake
-                pass
 
     def _ensure_dispatcher(self) -> None:
         with self._lock:
@@ -370,6 +376,7 @@ class DdsNode:
             sub.close()
 
     def qos_of(self, ent: Publisher[Any] | Subscription[Any]) -> dict[str, object]:
+        """The QoS a publisher or subscription actually uses, as a plain dict (for diagnostics)."""
         return describe(ent.qos)
 
     def close(self) -> None:

@@ -48,14 +48,17 @@ class Transform3:
                           _qmul(self.rotation, other.rotation), min(self.stamp, other.stamp))
 
     def inverse(self) -> Transform3:
+        """The transform the other way round (child to parent), same stamp."""
         qi = (-self.rotation[0], -self.rotation[1], -self.rotation[2], self.rotation[3])
         t = _rotate(qi, self.translation)
         return Transform3((-t[0], -t[1], -t[2]), qi, self.stamp)
 
     def to_pose2d(self) -> tuple[float, float, float]:
+        """The planar part: x, y and yaw."""
         return self.translation[0], self.translation[1], quat_to_yaw(*self.rotation)
 
     def to_msg(self) -> Transform:
+        """As a ROS Transform message."""
         return Transform(translation=Vector3(*self.translation), rotation=Quaternion(*self.rotation))
 
 
@@ -86,6 +89,7 @@ def _slerp(a: tuple[float, ...], b: tuple[float, ...], u: float) -> tuple[float,
 
 
 def stamp_to_sec(stamp: float | Time | None) -> float:
+    """A stamp (seconds, Time or None = latest) as float seconds, 0.0 for None."""
     if stamp is None:
         return 0.0
     return stamp.to_sec() if isinstance(stamp, Time) else float(stamp)
@@ -217,13 +221,16 @@ class TfBuffer:
 
     def set_pose2d(self, parent: str, child: str, x: float, y: float, yaw: float, stamp: float | Time = 0.0,
                    static: bool = False) -> None:
+        """Store a planar transform parent -> child (as ``set_transform`` does with a message)."""
         self.set_transform(make_transform(parent, child, x, y, yaw, stamp), static=static)
 
     def clear(self) -> None:
+        """Forget every stored transform (after a time jump or a reset)."""
         with self._lock:
             self._links.clear()
 
     def frames(self) -> list[str]:
+        """Every frame the buffer knows, sorted."""
         with self._lock:
             return sorted(set(self._links) | {lk.parent for lk in self._links.values()})
 
@@ -277,6 +284,7 @@ class TfBuffer:
     lookup = lookup_pose2d
 
     def can_transform(self, target: str, source: str, time: float | Time | None = None) -> bool:
+        """Whether ``lookup_transform(target, source, time)`` would succeed now."""
         try:
             self.lookup_transform(target, source, time)
             return True
@@ -296,6 +304,7 @@ class TfBuffer:
         return True
 
     def close(self) -> None:
+        """Stop listening to /tf and /tf_static."""
         for s in self._subs:
             s.close()
         self._subs = []
@@ -320,13 +329,16 @@ class TfBroadcaster:
         self._pub = node.create_publisher(self.topic, TFMessage, self.qos, self.depth)
 
     def send(self, parent: str, child: str, x: float, y: float, yaw: float, stamp: float | Time = 0.0) -> None:
+        """Publish one planar transform parent -> child."""
         self.send_transform([make_transform(parent, child, x, y, yaw, stamp)])
 
     def send_transform(self, transforms: TransformStamped | list[TransformStamped]) -> None:
+        """Publish one or more stamped transforms in one TFMessage."""
         ts = [transforms] if isinstance(transforms, TransformStamped) else list(transforms)
         self._pub.publish(TFMessage(transforms=ts))
 
     def close(self) -> None:
+        """Stop publishing."""
         self._pub.close()
 
 
@@ -340,6 +352,7 @@ class StaticTfBroadcaster(TfBroadcaster):
         self._all: dict[str, TransformStamped] = {}
 
     def send_transform(self, transforms: TransformStamped | list[TransformStamped]) -> None:
+        """Add or replace these static transforms and republish all of them (latched, like tf2's static broadcaster)."""
         ts = [transforms] if isinstance(transforms, TransformStamped) else list(transforms)
         for t in ts:
             self._all[_norm_frame(t.child_frame_id)] = t

@@ -1,19 +1,20 @@
-"""SLAM core: numpy/scipy only, no middleware. See :class:`SlamEngine` for the entry point."""
+"""SLAM core: numpy/scipy only, no middleware and no file formats. See :class:`SlamEngine` for the entry point.
+
+Session files are :mod:`slam_service.session_io`; the PNG map card is :mod:`slam_service.render`.
+"""
 
 from .engine import SlamEngine
 from .lookup import LookupGrid
 from .matcher import MatchResult, match_scan
 from .metrics import align_se2, ate_rmse, occupied_iou
-from .occupancy import OccupancyGrid
+from .occupancy import LogOddsGrid
 from .posegraph import PoseGraph
 from .preprocess import PreparedScan, ScanError, prepare_scan
-from .render import render_map_png
-from .session import SessionData, SessionFileError, SessionSaveError, load_session, save_session
+from .session import SessionData
 from .types import Scan, SlamConfig, SlamStats, Update
 
 __all__ = [
-    "LookupGrid", "MatchResult", "OccupancyGrid", "PoseGraph", "PreparedScan", "Scan", "ScanError",
-    "SessionData", "SessionFileError", "SessionSaveError", "SlamConfig", "SlamEngine", "SlamStats", "Update",
-    "align_se2", "ate_rmse", "load_session", "match_scan", "occupied_iou", "prepare_scan", "render_map_png",
-    "save_session",
+    "LogOddsGrid", "LookupGrid", "MatchResult", "PoseGraph", "PreparedScan", "Scan", "ScanError", "SessionData",
+    "SlamConfig", "SlamEngine", "SlamStats", "Update", "align_se2", "ate_rmse", "match_scan", "occupied_iou",
+    "prepare_scan",
 ]

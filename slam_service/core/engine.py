@@ -11,24 +11,22 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import os
 import time
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_common.geometry import compose, inverse, relative, transform_points
+from robonix_common.geometry import PoseArray, compose, inverse, relative, transform_points
 from robonix_common.grid import GridMap
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
-from .occupancy import OccupancyGrid
+from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
 from .preprocess import ScanError, prepare_scan
-from .session import SessionData, load_session, save_session
-from .types import Pose, Scan, SlamConfig, SlamStats, Update, as_pose
+from .session import SessionData
+from .types import Scan, SlamConfig, SlamStats, Update, as_pose
 
 log = logging.getLogger(__name__)
 Mode = Literal["mapping", "localization"]
@@ -52,22 +50,22 @@ class SlamEngine:
         """Forget the map and trajectory (a loaded localization map is kept)."""
         c = self.config
         self.graph = PoseGraph()
-        self._odom: list[Pose] = []
+        self._odom: list[PoseArray] = []
         self._stamps: list[float] = []
         self._path: list[float] = []
         self._points: list[NDArray[np.float32]] = []
         self._origins: list[NDArray[np.float64]] = []
         self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
-        self.grid = OccupancyGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
+        self.grid = LogOddsGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
                                   hi=c.log_odds_max, occupied_threshold=c.occupied_threshold,
                                   free_threshold=c.free_threshold, chunk=c.grid_chunk)
         self.stats = SlamStats()
         self._map_to_odom = np.zeros(3)
         self._pose = np.zeros(3)
-        self._last_odom: Pose | None = None
+        self._last_odom: PoseArray | None = None
         self._last_stamp: float | None = None
-        self._initial_pose: Pose | None = None
-        self._last_match_pose: Pose | None = None  # localization gating reference
+        self._initial_pose: PoseArray | None = None
+        self._last_match_pose: PoseArray | None = None  # localization gating reference
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
         self._running_built_at = 0
         self._last_loop_node = -10**9
@@ -90,10 +88,10 @@ class SlamEngine:
         self._mode = mode
         self._last_match_pose = None
 
-    def pose(self) -> Pose:
+    def pose(self) -> PoseArray:
         return self._pose.copy()
 
-    def map_to_odom(self) -> Pose:
+    def map_to_odom(self) -> PoseArray:
         return self._map_to_odom.copy()
 
     def trajectory(self) -> NDArray[np.float64]:
@@ -116,11 +114,10 @@ class SlamEngine:
         self._last_match_pose = None
 
     # ---------------------------------------------------------------- load / save
-    def load(self, grid: GridMap | None = None, session: SessionData | str | os.PathLike[str] | None = None,
+    def load(self, grid: GridMap | None = None, session: SessionData | None = None,
              *, mode: Mode | None = None, initial_pose: object | None = None) -> None:
-        """Load a map and/or a saved session. Default mode: mapping if a session is given, else localization."""
-        if isinstance(session, str | os.PathLike):
-            session = load_session(session)
+        """Load a map and/or a session snapshot (:func:`slam_service.session_io.load_session` reads one from a
+        file). Default mode: mapping if a session is given, else localization."""
         if grid is None and session is None:
             raise ValueError("load() needs a grid, a session, or both")
         mode = mode or ("mapping" if session is not None else "localization")
@@ -161,13 +158,10 @@ class SlamEngine:
                            np.asarray(self._path, dtype=float), list(self._points),
                            np.asarray(self._origins).reshape(-1, 2), self.config)
 
-    def save_session(self, path: str | os.PathLike[str]) -> Path:
-        return save_session(self.session(), path)
-
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
-        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy), max(c.coarse_factor, c.loop_coarse_factor),
-                            c.smear_sigma, grid.resolution)
+        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy),
+                            max(c.coarse_factor, c.loop_coarse_factor), c.smear_sigma, grid.resolution)
         pad = int(math.ceil(m / grid.resolution))
         mask = np.pad(grid.data >= 65, pad)
         self._fixed_lookup = LookupGrid.from_mask(mask, grid.resolution, grid.origin_x - pad * grid.resolution,
@@ -238,11 +232,11 @@ class SlamEngine:
             return self._localize(prep.points, predicted, odom)
         return self._map_step(prep.points, prep.origin, predicted, odom, t)
 
-    def _moved(self, ref: Pose, pose: Pose) -> bool:
+    def _moved(self, ref: PoseArray, pose: PoseArray) -> bool:
         d = relative(ref, pose)
         return math.hypot(d[0], d[1]) >= self.config.min_travel_distance or abs(d[2]) >= self.config.min_travel_heading
 
-    def _match(self, lookup: LookupGrid, points: NDArray, seed: Pose, loop: bool = False) -> MatchResult:
+    def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False) -> MatchResult:
         c = self.config
         return match_scan(lookup, points, seed,
                           window_xy=c.loop_search_window_xy if loop else c.search_window_xy,
@@ -250,7 +244,7 @@ class SlamEngine:
                           angular_step=c.angular_step, coarse_factor=c.loop_coarse_factor if loop else c.coarse_factor,
                           refine=c.refine, sigma=c.smear_sigma, penalty=0.0 if loop else c.match_penalty)
 
-    def _localize(self, points: NDArray, predicted: Pose, odom: Pose) -> Update:
+    def _localize(self, points: NDArray, predicted: PoseArray, odom: PoseArray) -> Update:
         if self._fixed_lookup is None:
             return self._skip("localization mode without a map", "scans_skipped_invalid")
         if self._last_match_pose is not None and not self._moved(self._last_match_pose, predicted):
@@ -267,7 +261,7 @@ class SlamEngine:
         self.stats.scans_integrated += 1
         return self._update(True, False, response=m.response)
 
-    def _map_step(self, points: NDArray, origin: NDArray, predicted: Pose, odom: Pose, t: float) -> Update:
+    def _map_step(self, points: NDArray, origin: NDArray, predicted: PoseArray, odom: PoseArray, t: float) -> Update:
         c = self.config
         n = self.graph.n_nodes
         prev = self._resume_from if self._resume_from is not None else n - 1
@@ -319,7 +313,7 @@ class SlamEngine:
         parts = [transform_points(poses[i], self._points[i]) for i in nodes]
         return np.concatenate(parts) if parts else np.zeros((0, 2))
 
-    def _build_running(self, center: Pose, points: NDArray) -> LookupGrid:
+    def _build_running(self, center: PoseArray, points: NDArray) -> LookupGrid:
         """Lookup over the last nodes' scans, cropped to where the current scan can land (EDT cost)."""
         c = self.config
         n = self.graph.n_nodes
@@ -366,7 +360,8 @@ class SlamEngine:
         limit = c.loop_max_correction + c.loop_max_correction_ratio * (path[k] - path[cand])
         at_edge = (abs(m.pose[0] - poses[k, 0]) > c.loop_search_window_xy - c.resolution
                    or abs(m.pose[1] - poses[k, 1]) > c.loop_search_window_xy - c.resolution
-                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi)) > c.loop_search_window_theta - c.angular_step)
+                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi))
+                   > c.loop_search_window_theta - c.angular_step)
         if m.response < c.loop_min_response or corr > limit or at_edge:
             return self._reject_loop("response/window")
         found = self._verified_loop(lookup, k, cand, m)

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from robonix_common.grid import FREE, OCCUPIED, UNKNOWN, GridMap
 
 
-class OccupancyGrid:
+class LogOddsGrid:
     """Cell (r, c) covers x in [ox + c res, ox + (c+1) res), row 0 at the bottom (GridMap convention)."""
 
     def __init__(self, resolution: float, *, hit: float = 0.85, miss: float = -0.4, lo: float = -2.0,

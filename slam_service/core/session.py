@@ -1,40 +1,24 @@
-"""Saved SLAM sessions: the pose graph plus every node's scan, so mapping can continue later.
+"""The in-memory snapshot of a SLAM session: the pose graph plus every node's scan, so mapping can continue.
 
-One ``.npz`` (no pickle, so a hostile file cannot run code) with a format tag and a version; written to
-a temp file and renamed, so a crash or a full disk never leaves a half-written session behind.
+The core only builds and consumes this snapshot; reading and writing it as a file is
+:mod:`slam_service.session_io`'s job, so the core never touches a file format.
 """
 
 from __future__ import annotations
 
-import io
-import json
-import os
-import zipfile
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_api.mapfile import atomic_write
-
 from .posegraph import PoseGraph
 from .types import SlamConfig
-
-FORMAT = "robonix-slam-session"
-VERSION = 1
-
-
-class SessionFileError(ValueError):
-    """A session file is missing, unreadable or malformed; the message names the file and the problem."""
-
-
-class SessionSaveError(OSError):
-    """A session could not be written (the previous file, if any, is left untouched)."""
 
 
 @dataclass
 class SessionData:
+    """Everything :meth:`SlamEngine.load` needs to continue mapping where a run stopped."""
+
     graph: PoseGraph
     odom: NDArray[np.float64]  # (N, 3) odometry pose at each node
     stamps: NDArray[np.float64]  # (N,)
@@ -42,95 +26,3 @@ class SessionData:
     points: list[NDArray[np.float32]] = field(default_factory=list)  # per node, base frame (P, 2)
     origins: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))  # lidar position, base
     config: SlamConfig = field(default_factory=SlamConfig)
-
-
-def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:
-    path = Path(path)
-    g = data.graph
-    n = g.n_nodes
-    offsets = np.zeros(n + 1, dtype=np.int64)
-    offsets[1:] = np.cumsum([len(p) for p in data.points]) if n else []
-    arrays = {
-        "format": np.array(FORMAT),
-        "version": np.array(VERSION),
-        "config": np.array(json.dumps(data.config.to_dict())),
-        "poses": g.poses.astype(np.float64).reshape(-1, 3),
-        "odom": np.asarray(data.odom, dtype=np.float64).reshape(-1, 3),
-        "stamps": np.asarray(data.stamps, dtype=np.float64).reshape(-1),
-        "path_dist": np.asarray(data.path_dist, dtype=np.float64).reshape(-1),
-        "points": (np.concatenate(data.points).astype(np.float32) if n else np.zeros((0, 2), np.float32)),
-        "point_offsets": offsets,
-        "origins": np.asarray(data.origins, dtype=np.float64).reshape(-1, 2),
-        "edge_ij": np.asarray(g.edge_ij, dtype=np.int64).reshape(-1, 2),
-        "edge_z": np.asarray(g.edge_z, dtype=np.float64).reshape(-1, 3),
-        "edge_info": np.asarray(g.edge_info, dtype=np.float64).reshape(-1, 3, 3),
-        "edge_kind": np.asarray(g.edge_kind, dtype=np.int64).reshape(-1),
-    }
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    try:
-        if not path.parent.is_dir():
-            raise FileNotFoundError(f"directory {path.parent} does not exist")
-        atomic_write(path, buf.getvalue())
-    except OSError as exc:
-        raise SessionSaveError(f"cannot write SLAM session to {path}: {exc}") from exc
-    return path
-
-
-def load_session(path: str | os.PathLike[str]) -> SessionData:
-    path = Path(path)
-
-    def bad(msg: str) -> SessionFileError:
-        return SessionFileError(f"{path}: {msg}")
-
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            a = {k: z[k] for k in z.files}
-    except FileNotFoundError as exc:
-        raise bad("no such file") from exc
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise bad(f"not a SLAM session file ({type(exc).__name__}: {exc})") from exc
-    if str(a.get("format", "")) != FORMAT:
-        raise bad(f"not a SLAM session file (format tag {str(a.get('format', 'missing'))!r})")
-    try:
-        version = int(a["version"])
-    except (KeyError, ValueError, TypeError) as exc:
-        raise bad("missing or bad 'version'") from exc
-    if version != VERSION:
-        raise bad(f"unsupported session version {version} (this build reads {VERSION})")
-    need = ("config", "poses", "odom", "stamps", "path_dist", "points", "point_offsets", "origins", "edge_ij",
-            "edge_z", "edge_info", "edge_kind")
-    for k in need:
-        if k not in a:
-            raise bad(f"missing array '{k}'")
-    try:
-        config = SlamConfig.from_dict(json.loads(str(a["config"])))
-    except (ValueError, TypeError) as exc:
-        raise bad(f"bad 'config': {exc}") from exc
-    poses = a["poses"]
-    n = len(poses)
-    shapes = {"poses": (n, 3), "odom": (n, 3), "stamps": (n,), "path_dist": (n,), "origins": (n, 2),
-              "point_offsets": (n + 1,)}
-    for k, shp in shapes.items():
-        if a[k].shape != shp:
-            raise bad(f"'{k}' has shape {a[k].shape}, expected {shp}")
-    e = len(a["edge_ij"])
-    for k, shp in {"edge_ij": (e, 2), "edge_z": (e, 3), "edge_info": (e, 3, 3), "edge_kind": (e,)}.items():
-        if a[k].shape != shp:
-            raise bad(f"'{k}' has shape {a[k].shape}, expected {shp}")
-    off = a["point_offsets"]
-    pts = a["points"]
-    if pts.ndim != 2 or pts.shape[1] != 2 or off[0] != 0 or off[-1] != len(pts) or np.any(np.diff(off) < 0):
-        raise bad("'points'/'point_offsets' are inconsistent")
-    for k in ("poses", "odom", "points", "edge_z", "edge_info", "origins"):
-        if not np.all(np.isfinite(a[k])):
-            raise bad(f"'{k}' contains NaN/inf")
-    graph = PoseGraph(poses.astype(np.float64).copy())
-    try:
-        for (i, j), zz, info, kind in zip(a["edge_ij"], a["edge_z"], a["edge_info"], a["edge_kind"], strict=True):
-            graph.add_edge(int(i), int(j), zz, info, int(kind))
-    except ValueError as exc:
-        raise bad(f"bad edge: {exc}") from exc
-    points = [pts[off[k]:off[k + 1]].astype(np.float32) for k in range(n)]
-    return SessionData(graph, a["odom"].astype(np.float64), a["stamps"].astype(np.float64),
-                       a["path_dist"].astype(np.float64), points, a["origins"].astype(np.float64), config)

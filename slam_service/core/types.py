@@ -8,10 +8,11 @@ from dataclasses import asdict, dataclass, field, fields
 import numpy as np
 from numpy.typing import NDArray
 
-Pose = NDArray[np.float64]  # (x, y, theta)
+from robonix_common.geometry import PoseArray
+from robonix_common.params import ParamError, check_ranges, param
 
 
-def as_pose(p: object, name: str = "pose") -> Pose:
+def as_pose(p: object, name: str = "pose") -> PoseArray:
     """Validate and convert anything pose-like to a float64 (3,) array (clear error otherwise)."""
     try:
         a = np.asarray(p, dtype=np.float64).reshape(-1)
@@ -45,96 +46,89 @@ class Scan:
 
 @dataclass
 class SlamConfig:
-    """Tunables (slam_toolbox-like defaults). Validated on construction; errors name the field."""
+    """Tunables (slam_toolbox-like defaults). Each field's default, range and doc are declared here once
+    (:func:`robonix_common.params.param`); the ranges are physical: values past them pass the algorithm but
+    would exhaust memory or CPU (a 1e-9 m resolution, a 1e6 m search window). Validated on construction;
+    errors (:class:`~robonix_common.params.ParamError`) name the field."""
 
-    resolution: float = 0.05
-    max_range: float = 12.0  # beams longer than this are not used (m)
-    min_travel_distance: float = 0.2  # motion gating: integrate a scan after this much travel (m) ...
-    min_travel_heading: float = 0.2  # ... or this much rotation (rad)
+    resolution: float = param(0.05, ge=0.005, le=1.0, doc="m per map cell")
+    max_range: float = param(12.0, ge=0.1, le=100.0, doc="m; longer beams are not used")
+    min_travel_distance: float = param(0.2, ge=0, doc="m of travel after which a scan is integrated (motion gating)")
+    min_travel_heading: float = param(0.2, ge=0, doc="rad of rotation after which a scan is integrated")
     # sequential scan-to-submap matching
-    search_window_xy: float = 0.3  # half-width (m)
-    search_window_theta: float = 0.2  # half-width (rad)
-    angular_step: float = 0.008  # rad
-    coarse_factor: int = 4  # cells per coarse cell (branch and bound level)
-    smear_sigma: float = 0.075  # likelihood-field Gaussian sigma (m)
-    running_buffer_size: int = 20  # nodes in the running submap
-    lookup_rebuild_nodes: int = 3  # rebuild the running-submap lookup every this many nodes (EDT cost)
-    min_response: float = 0.35  # below: fall back to odometry
-    match_penalty: float = 0.2  # score reduction at the window edge: prior on the odometry seed
-    refine: bool = True  # sub-cell Gauss-Newton refinement of the correlative optimum
+    search_window_xy: float = param(0.3, gt=0, le=5.0, doc="m, half-width of the sequential search window")
+    search_window_theta: float = param(0.2, gt=0, le=math.pi, doc="rad, half-width of the sequential search")
+    angular_step: float = param(0.008, ge=0.0005, le=0.5, doc="rad between tried headings")
+    coarse_factor: int = param(4, ge=1, le=64, doc="cells per coarse cell (branch and bound level)")
+    smear_sigma: float = param(0.075, gt=0, le=5.0, doc="m, likelihood-field Gaussian sigma")
+    running_buffer_size: int = param(20, ge=1, le=1000, doc="nodes in the running submap")
+    lookup_rebuild_nodes: int = param(3, ge=1, le=1000, doc="rebuild the running-submap lookup every this many "
+                                      "nodes (distance-transform cost)")
+    min_response: float = param(0.35, ge=0, le=1, doc="match score below which the scan falls back to odometry")
+    match_penalty: float = param(0.2, ge=0, le=1, doc="score reduction at the window edge: prior on the odometry "
+                                 "seed")
+    refine: bool = param(True, doc="sub-cell Gauss-Newton refinement of the correlative optimum")
     # loop closure
-    loop_closure: bool = True
-    loop_search_radius: float = 3.0  # candidate nodes within this distance (m)
-    loop_min_chain_distance: float = 6.0  # ... and at least this far back along the path (m)
-    loop_submap_radius: float = 4.0  # old nodes within this distance of the candidate form the submap
-    loop_search_window_xy: float = 1.0
-    loop_search_window_theta: float = 0.3
-    loop_coarse_factor: int = 6
-    loop_min_response: float = 0.55
-    loop_max_correction: float = 1.5  # consistency: largest accepted correction (m) ...
-    loop_max_correction_ratio: float = 0.15  # ... plus this fraction of the chain distance
-    loop_cooldown_nodes: int = 8  # nodes between loop-closure attempts after a success
-    loop_retry_nodes: int = 2  # ... and after a rejected attempt
+    loop_closure: bool = param(True, doc="search for and add loop closures")
+    loop_search_radius: float = param(3.0, gt=0, le=100.0, doc="m; candidate nodes within this distance")
+    loop_min_chain_distance: float = param(6.0, ge=0, doc="m; ... and at least this far back along the path")
+    loop_submap_radius: float = param(4.0, gt=0, le=100.0, doc="m; old nodes within this distance of the "
+                                      "candidate form the submap")
+    loop_search_window_xy: float = param(1.0, gt=0, le=10.0, doc="m, half-width of the loop search window")
+    loop_search_window_theta: float = param(0.3, gt=0, le=math.pi, doc="rad, half-width of the loop search")
+    loop_coarse_factor: int = param(6, ge=1, le=64, doc="cells per coarse cell in loop matching")
+    loop_min_response: float = param(0.55, ge=0, le=1, doc="loop match score needed to consider a closure")
+    loop_max_correction: float = param(1.5, ge=0, doc="m; largest accepted loop correction ...")
+    loop_max_correction_ratio: float = param(0.15, ge=0, doc="... plus this fraction of the chain distance")
+    loop_cooldown_nodes: int = param(8, ge=0, le=100_000, doc="nodes between loop attempts after a success")
+    loop_retry_nodes: int = param(2, ge=0, le=100_000, doc="nodes between loop attempts after a rejection")
     # loop-closure verification: a closure is added only if it is precise, never "probably right"
-    loop_inlier_distance: float = 0.05  # an endpoint is an inlier within this distance of the old submap (m)
-    loop_min_inlier_fraction: float = 0.8  # ... and this fraction of endpoints must be inliers (overlap test)
-    loop_verify: bool = True  # reverse match: the old node's scan into the current local submap must agree
-    loop_verify_xy: float = 0.03  # largest forward/reverse disagreement (m) ...
-    loop_verify_theta: float = 0.015  # ... and (rad)
-    loop_sigma_floor_xy: float = 0.01  # loop edges are never trusted more than this (m) ...
-    loop_sigma_floor_theta: float = 0.005  # ... and (rad): conservative next to the scan-matching chain
-    loop_huber: float = 3.0  # Huber kernel on loop edges in the optimiser (standard deviations); 0 = off
-    loop_max_chi2: float = 16.0  # a new loop edge still this inconsistent after optimisation is removed
-    optimizer_iterations: int = 15
-    re_render_threshold: float = 0.02  # re-render a node's scan when it moved more than this (m, at max range)
+    loop_inlier_distance: float = param(0.05, gt=0, doc="m; an endpoint within this of the old submap is an "
+                                        "inlier")
+    loop_min_inlier_fraction: float = param(0.8, ge=0, le=1, doc="fraction of endpoints that must be inliers "
+                                            "(overlap test)")
+    loop_verify: bool = param(True, doc="reverse match: the old node's scan into the current local submap must "
+                              "agree")
+    loop_verify_xy: float = param(0.03, gt=0, doc="m; largest forward/reverse disagreement ...")
+    loop_verify_theta: float = param(0.015, gt=0, doc="rad; ... and in heading")
+    loop_sigma_floor_xy: float = param(0.01, gt=0, doc="m; loop edges are never trusted more than this ...")
+    loop_sigma_floor_theta: float = param(0.005, gt=0, doc="rad; ... and this (conservative next to the chain)")
+    loop_huber: float = param(3.0, ge=0, doc="Huber kernel on loop edges (standard deviations); 0 = off")
+    loop_max_chi2: float = param(16.0, ge=0, doc="a new loop edge still this inconsistent after optimisation "
+                                 "is removed")
+    optimizer_iterations: int = param(15, ge=1, le=1000, doc="Gauss-Newton iterations per optimisation")
+    re_render_threshold: float = param(0.02, ge=0, doc="m at max range; re-render a node's scan when it moved "
+                                       "more")
     # occupancy grid (log-odds)
-    log_odds_hit: float = 0.85
-    log_odds_miss: float = -0.4
-    log_odds_min: float = -2.0
-    log_odds_max: float = 3.5
-    occupied_threshold: float = 0.2  # log-odds above -> 100
-    free_threshold: float = -0.2  # log-odds below -> 0
-    grid_chunk: int = 64  # the grid grows in chunks of this many cells
+    log_odds_hit: float = param(0.85, gt=0, doc="log-odds added per hit")
+    log_odds_miss: float = param(-0.4, lt=0, doc="log-odds added per miss")
+    log_odds_min: float = param(-2.0, doc="clamp of the reported log-odds (below free_threshold)")
+    log_odds_max: float = param(3.5, gt=0, doc="clamp of the reported log-odds (above occupied_threshold)")
+    occupied_threshold: float = param(0.2, doc="log-odds above -> 100")
+    free_threshold: float = param(-0.2, doc="log-odds below -> 0")
+    grid_chunk: int = param(64, ge=8, le=4096, doc="cells; the grid grows in chunks of this many")
     # robustness
-    max_odom_jump_distance: float = 1.0  # per scan (m): larger odometry steps are treated as jumps
-    max_odom_jump_heading: float = 1.0  # per scan (rad)
-    odom_sigma_xy: float = 0.05  # odometry-fallback edge std dev per node (m)
-    odom_sigma_theta: float = 0.03  # (rad)
-    min_valid_beams: int = 20  # scans with fewer usable beams are skipped
+    max_odom_jump_distance: float = param(1.0, gt=0, doc="m per scan; larger odometry steps are jumps")
+    max_odom_jump_heading: float = param(1.0, gt=0, doc="rad per scan; larger odometry turns are jumps")
+    odom_sigma_xy: float = param(0.05, gt=0, doc="m; odometry-fallback edge std dev per node")
+    odom_sigma_theta: float = param(0.03, gt=0, doc="rad; odometry-fallback edge std dev per node")
+    min_valid_beams: int = param(20, ge=1, le=100_000, doc="scans with fewer usable beams are skipped")
 
     def __post_init__(self) -> None:
-        positive = ("resolution", "max_range", "search_window_xy", "search_window_theta", "angular_step",
-                    "smear_sigma", "loop_search_radius", "loop_submap_radius", "loop_search_window_xy",
-                    "loop_search_window_theta", "loop_inlier_distance", "loop_verify_xy",
-                    "loop_verify_theta", "loop_sigma_floor_xy", "loop_sigma_floor_theta", "log_odds_hit", "log_odds_max", "max_odom_jump_distance",
-                    "max_odom_jump_heading", "odom_sigma_xy", "odom_sigma_theta")
         for f in fields(self):
             v = getattr(self, f.name)
             if isinstance(v, bool):
                 continue
             if not isinstance(v, int | float) or not math.isfinite(v):
-                raise ValueError(f"SlamConfig.{f.name} must be a finite number, got {v!r}")
-            if f.name in positive and v <= 0:
-                raise ValueError(f"SlamConfig.{f.name} must be > 0, got {v!r}")
-        for name in ("min_travel_distance", "min_travel_heading", "loop_min_chain_distance",
-                     "loop_max_correction", "loop_max_correction_ratio", "loop_cooldown_nodes", "loop_retry_nodes",
-                     "re_render_threshold", "loop_huber", "loop_max_chi2"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"SlamConfig.{name} must be >= 0, got {getattr(self, name)!r}")
-        for name in ("coarse_factor", "loop_coarse_factor", "running_buffer_size", "lookup_rebuild_nodes", "grid_chunk",
-                     "optimizer_iterations", "min_valid_beams"):
-            v = getattr(self, name)
-            if int(v) != v or v < 1:
-                raise ValueError(f"SlamConfig.{name} must be a positive integer, got {v!r}")
-            setattr(self, name, int(v))
-        for name in ("min_response", "loop_min_response", "match_penalty", "loop_min_inlier_fraction"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"SlamConfig.{name} must be in [0, 1], got {getattr(self, name)!r}")
-        if self.log_odds_miss >= 0:
-            raise ValueError(f"SlamConfig.log_odds_miss must be < 0, got {self.log_odds_miss!r}")
+                raise ParamError(f.name, f"must be a finite number, got {v!r}", "SlamConfig.")
+            if f.type == "int":
+                if int(v) != v:
+                    raise ParamError(f.name, f"must be an integer, got {v!r}", "SlamConfig.")
+                setattr(self, f.name, int(v))
+        check_ranges(self, "SlamConfig.")
         if not self.log_odds_min < self.free_threshold <= self.occupied_threshold < self.log_odds_max:
-            raise ValueError("SlamConfig.free_threshold/occupied_threshold must satisfy "
-                             "log_odds_min < free_threshold <= occupied_threshold < log_odds_max")
+            raise ParamError("free_threshold", "free_threshold/occupied_threshold must satisfy "
+                             "log_odds_min < free_threshold <= occupied_threshold < log_odds_max", "SlamConfig.")
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -176,8 +170,8 @@ class SlamStats:
 class Update:
     """Result of one ``SlamEngine.process`` call."""
 
-    pose_map: Pose
-    map_to_odom: Pose
+    pose_map: PoseArray
+    map_to_odom: PoseArray
     map_changed: bool
     integrated: bool
     response: float = float("nan")

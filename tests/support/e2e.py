@@ -22,7 +22,7 @@ __all__ = ["SIM_DEPLOY", "alive", "e2e_env", "grpc_endpoint", "navigate", "rbnx_
 
 def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
     """Isolated state dir, an atlas port of the OS's choosing, a DDS domain no other test run uses."""
-    from rbnx.demo_boot import pick_domain_id
+    from rbnx.demo.boot import pick_domain_id
 
     env = dict(os.environ, RBNX_STATE_DIR=str(tmp / "state"), RBNX_ATLAS_LISTEN="127.0.0.1:0",
                PYTHONUNBUFFERED="1", ROS_DOMAIN_ID=str(pick_domain_id()))

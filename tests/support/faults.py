@@ -29,6 +29,7 @@ import grpc
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import stop_process
 from robonix_api.proto_gen import navigation_pb2, sim_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 from robonix_api.types import LifecycleState
@@ -85,7 +86,7 @@ class SimBoot:
 
     def __init__(self, tmp: Path, scene: str = "kitchen", rtf: str = "1", env: dict[str, str] | None = None,
                  boot_timeout_s: float = 180.0, deploy: Path = SIM_DEPLOY) -> None:
-        from rbnx.demo_boot import pick_domain_id
+        from rbnx.demo.boot import pick_domain_id
 
         self.tmp, self.deploy = tmp, deploy
         self.listen = f"127.0.0.1:{free_port()}"
@@ -265,13 +266,8 @@ class SimBoot:
 
     def _stop_own_atlas(self) -> None:
         a, self.own_atlas = self.own_atlas, None
-        if a is not None and a.poll() is None:
-            a.terminate()
-            try:
-                a.wait(15)
-            except subprocess.TimeoutExpired:
-                a.kill()
-                a.wait(15)
+        if a is not None:
+            stop_process(a, 15.0, kill_timeout=15.0)
 
     def close(self) -> None:
         """Last resort (a failed test): SIGCONT + SIGKILL every recorded process, by PID."""

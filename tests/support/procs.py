@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -18,6 +17,7 @@ from typing import Any
 import grpc
 
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import stop_process
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 
 from .wait import wait_until  # also imported from here by the tests and bench/nav_latency_bench.py
@@ -126,13 +126,7 @@ class Proc:
         """SIGTERM by PID, SIGKILL after 30 s; asserts the process is gone and returns its exit code.
         Safe to call again."""
         pid = self.proc.pid
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(30)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(10)
+        stop_process(self.proc, 30.0)
         for ch in self._channels:
             ch.close()
         self._channels.clear()

@@ -15,7 +15,7 @@ import sys
 import threading
 from typing import Any
 
-from hal_panda_mobile.sim import load_robot_description, load_scene
+from hal_panda_mobile.files import load_robot_description, load_scene
 from hal_panda_mobile.sim.raster import rasterize
 from robonix_api import Err, Ok, Service
 from robonix_api.dds import Clock, OccupancyGrid, TfBroadcaster

@@ -16,7 +16,7 @@ import pytest
 from support.browser import free_port
 from support.procs import wait_until
 
-from rbnx.dashboard.cli import start_background
+from rbnx.dashboard.launch import start_background
 from robonix_api.dds import DdsNode, OccupancyGrid, StaticTfBroadcaster, TfBroadcaster
 from robonix_api.dds.convert import header
 

@@ -33,7 +33,7 @@ time.sleep(120)
 
 PARENT = r"""
 import signal, subprocess, sys, time
-import rbnx.procs as procs
+import rbnx.boot.procs as procs
 if sys.argv[1] == "shim":
     procs._SETPRIV = None
 cmd = procs.with_parent_death_signal([sys.executable, "-c", sys.argv[3], sys.argv[4]], signal.Signals[sys.argv[2]])
@@ -46,7 +46,7 @@ time.sleep(120)
 @pytest.mark.parametrize("how", ["setpriv", "shim"])
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 def test_child_gets_the_signal_when_its_parent_is_killed(tmp_path: Path, how: str, sig: str) -> None:
-    import rbnx.procs as procs
+    import rbnx.boot.procs as procs
 
     if how == "setpriv" and procs._SETPRIV is None:
         pytest.skip("util-linux setpriv is not installed")

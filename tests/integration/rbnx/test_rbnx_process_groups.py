@@ -9,7 +9,7 @@ from pathlib import Path
 
 from support.wait import wait_until
 
-from rbnx.procs import group_members, pid_alive, run_hook, spawn
+from rbnx.boot.procs import group_members, pid_alive, run_hook, spawn
 
 
 def test_spawned_group_stops_with_grandchildren(tmp_path: Path) -> None:

@@ -17,7 +17,7 @@ import pytest
 SCRIPT = r"""
 import sys, threading, time
 from pathlib import Path
-import rbnx.procs as procs  # rbnx's package import must switch gRPC fork support off
+import rbnx.boot.procs as procs  # rbnx's package import must switch gRPC fork support off
 import grpc
 from atlas.server import AtlasServer
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc

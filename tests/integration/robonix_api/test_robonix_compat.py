@@ -116,8 +116,8 @@ def test_atlas_robonix_calls_on_a_real_atlas(atlas_server) -> None:  # type: ign
         assert atlas.register_service("c_map", "robonix/service/map") == "c_map"
         assert atlas.register_skill("c_skill", "robonix/skill/demo") == "c_skill"
         # robonix-api's order, then ours: both land the same way
-        scan = atlas.declare_capability("c_lidar", LIDAR, Transport.ROS2, "/c_scan", Ros2Params("best_effort"))
-        assert scan == "/c_scan"
+        declared = atlas.declare_capability("c_lidar", LIDAR, Transport.ROS2, "/c_scan", Ros2Params("best_effort"))
+        assert declared == "/c_scan"
         atlas.declare_capability("c_map", GET_MODE, "127.0.0.1:9", "grpc")
         atlas.declare_capability(provider_id="c_map", contract_id=GET_POSE, transport="mcp",
                                  endpoint="http://127.0.0.1:9/mcp/", description="pose")

@@ -25,7 +25,7 @@ def test_apartment_route_with_noisy_lidar(std: float, dropout: float, nav_map: s
     tol = pipe.params.config.goal_checker.xy_goal_tolerance + slack
     for r in results:
         assert r.state == "SUCCEEDED", (r.goal, r.detail)
-        assert r.collisions == 0, (r.goal, r.final_error_xy)
+        assert r.collisions == 0, (r.goal, r.collisions)
         assert r.final_error_xy <= tol, (r.goal, r.final_error_xy)
     assert sum(r.recoveries for r in results) <= 2
 

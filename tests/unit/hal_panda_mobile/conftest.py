@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from hal_panda_mobile.sim import PandaMobileSim, RobotDescription, load_robot_description, load_scene
+from hal_panda_mobile.files import load_robot_description, load_scene
+from hal_panda_mobile.sim import PandaMobileSim, RobotDescription
 
 
 @pytest.fixture(scope="session")

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from hal_panda_mobile.sim import load_scene
-from hal_panda_mobile.sim.robot import robot_from_dict
+from hal_panda_mobile.files import load_scene, robot_from_dict
+from hal_panda_mobile.sim import LidarNoise
 
 from .conftest import make_sim, ray_distances, room
 
@@ -22,7 +23,7 @@ SCENE = room(boxes=[{"center": BOX[:2], "size": BOX[2:4], "yaw": BOX[4], "height
 
 
 def _robot_with(robot, **lidar):
-    data = robot.model_dump()
+    data = dataclasses.asdict(robot)
     data["lidar"].update(lidar)
     return robot_from_dict(data)
 
@@ -85,7 +86,7 @@ def test_noise_and_dropouts_seeded(robot):
     clean = sim_clean.scan().ranges
 
     def noisy(seed):
-        sim = make_sim(robot, room(), seed=seed, lidar_noise={"noise_std": 0.02, "dropout_prob": 0.25})
+        sim = make_sim(robot, room(), seed=seed, lidar_noise=LidarNoise(noise_std=0.02, dropout_prob=0.25))
         return sim.scan().ranges
 
     a, b, c = noisy(3), noisy(3), noisy(4)
@@ -99,6 +100,6 @@ def test_noise_and_dropouts_seeded(robot):
 
 
 def test_scan_stamp_is_sim_time(robot):
-    sim = make_sim(robot, load_scene("apartment").model_dump())
+    sim = make_sim(robot, dataclasses.asdict(load_scene("apartment")))
     sim.step(123)
     assert sim.scan().stamp == pytest.approx(123 * 0.002)

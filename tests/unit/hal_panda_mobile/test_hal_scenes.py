@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 import yaml
 
-from hal_panda_mobile.sim import (
-    PandaMobileSim,
-    SimConfigError,
-    available_scenes,
-    load_robot_description,
-    load_scene,
-)
+from hal_panda_mobile.files import available_scenes, load_robot_description, load_scene, robot_from_dict
+from hal_panda_mobile.sim import OdomNoise, PandaMobileSim, SimConfigError
 from hal_panda_mobile.sim.raster import rasterize, reachable
-from hal_panda_mobile.sim.robot import robot_from_dict
 from hal_panda_mobile.sim.scene import first_collision
 from hal_panda_mobile.sim.worldgen import ROBOT_CLEAR_RADIUS, merge_cells
 from robonix_api.mapfile import save_map_yaml
@@ -33,19 +28,19 @@ def test_builtin_scene_loads_free_start_reachable_waypoints(robot, name):
     assert name in available_scenes()
     xmin, ymin, xmax, ymax = scene.bounds
     assert 8 <= max(xmax - xmin, ymax - ymin) <= 20
-    assert first_collision(robot, scene.obstacles(), *scene.start.as_tuple(), clearance=0.05) is None
+    assert first_collision(robot, scene.obstacles(), *scene.start, clearance=0.05) is None
     # doorways/corridors let the base through: every waypoint connects to the start in free space
     # inflated by the base's half-width + margin
     grid = rasterize(scene.obstacles(), scene.bounds, 0.05, inflate=ROBOT_CLEAR_RADIUS, overlap=False)
     assert len(scene.waypoints) >= 3
-    assert all(reachable(grid, (scene.start.x, scene.start.y), list(scene.waypoints.values())))
+    assert all(reachable(grid, scene.start[:2], list(scene.waypoints.values())))
     PandaMobileSim(robot, scene)
 
 
 def test_outer_walls_are_closed(robot):
     """No beam escapes: from every waypoint of every built-in scene all 360 beams of a long-range lidar
     return (the stock 12 m lidar legitimately sees nothing down a 16 m corridor)."""
-    data = robot.model_dump()
+    data = dataclasses.asdict(robot)
     data["lidar"]["range_max"] = 40.0
     long_range = robot_from_dict(data)
     for name in BUILTIN:
@@ -62,7 +57,7 @@ def test_random_scene_seeded_and_valid(robot, seed):
     assert a == b
     assert load_scene(f"random:{seed + 100}") != a
     grid = rasterize(a.obstacles(), a.bounds, 0.05, inflate=ROBOT_CLEAR_RADIUS - 0.05, overlap=False)
-    assert all(reachable(grid, (a.start.x, a.start.y), list(a.waypoints.values())))
+    assert all(reachable(grid, a.start[:2], list(a.waypoints.values())))
     PandaMobileSim(robot, a)  # start free, compiles
 
 
@@ -100,7 +95,7 @@ def test_from_map_scan_matches_map_walls(robot, tmp_path):
     assert np.max(np.abs(scan.ranges - expected)) < 0.01
     # without a start pose the generator picks the free cell farthest from the walls
     auto = load_scene(path)
-    assert first_collision(robot, auto.obstacles(), *auto.start.as_tuple(), clearance=0.1) is None
+    assert first_collision(robot, auto.obstacles(), *auto.start, clearance=0.1) is None
     # a scene YAML may point at a map relative to itself
     (tmp_path / "world.yaml").write_text(yaml.safe_dump({"from_map": "small_map.yaml", "wall_height": 0.8}))
     assert load_scene(tmp_path / "world.yaml").boxes[0].height == 0.8
@@ -168,13 +163,13 @@ def test_start_in_collision_names_obstacle():
 
 def test_negative_rates_name_field(robot):
     scene = load_scene(room())
-    with pytest.raises(SimConfigError, match="odom_rate_hz: must be > 0"):
+    with pytest.raises(SimConfigError, match=r"^sim: odom_rate_hz: must be within \(0, 1000\], got -5$"):
         PandaMobileSim(robot, scene, odom_rate_hz=-5.0)
-    with pytest.raises(SimConfigError, match=r"odom_noise\.v_scale_std: must be >= 0"):
-        PandaMobileSim(robot, scene, odom_noise={"v_scale_std": -1})
+    with pytest.raises(SimConfigError, match=r"v_scale_std: must be >= 0"):
+        PandaMobileSim(robot, scene, odom_noise=OdomNoise(v_scale_std=-1))
     with pytest.raises(SimConfigError, match="timestep"):
         PandaMobileSim(robot, scene, timestep=0.01)  # below 500 Hz
-    data = robot.model_dump()
+    data = dataclasses.asdict(robot)
     data["lidar"]["rate_hz"] = -10
     with pytest.raises(SimConfigError, match=r"lidar\.rate_hz: must be > 0"):
         robot_from_dict(data)

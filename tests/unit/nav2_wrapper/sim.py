@@ -11,10 +11,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nav2_wrapper.core import Footprint, LaserScan, Navigator
+from nav2_wrapper.core import Navigator, RangeScan
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
-FOOTPRINT = Footprint.from_robot_yaml()
+FOOTPRINT = load_footprint()
 
 
 def room(width_m: float, height_m: float, res: float = 0.05,
@@ -36,7 +37,7 @@ def add_box(grid: GridMap, box: tuple[float, float, float, float]) -> GridMap:
     return GridMap(d, r, grid.origin_x, grid.origin_y)
 
 
-def cast_scan(grid: GridMap, pose: tuple[float, float, float], beams: int = 360, rmax: float = 6.0) -> LaserScan:
+def cast_scan(grid: GridMap, pose: tuple[float, float, float], beams: int = 360, rmax: float = 6.0) -> RangeScan:
     """Ray-cast a 360° scan on the true grid (step res/2; origin yaw assumed 0)."""
     ang = pose[2] + np.linspace(-math.pi, math.pi, beams, endpoint=False)
     t = np.arange(0.05, rmax, grid.resolution / 2)
@@ -50,7 +51,7 @@ def cast_scan(grid: GridMap, pose: tuple[float, float, float], beams: int = 360,
     hit |= ~inb
     first = np.where(hit.any(axis=1), hit.argmax(axis=1), -1)
     ranges = np.where(first >= 0, t[np.maximum(first, 0)], np.inf)
-    return LaserScan(ranges, -math.pi, 2 * math.pi / beams, 0.05, rmax)
+    return RangeScan(ranges, -math.pi, 2 * math.pi / beams, 0.05, rmax)
 
 
 def footprint_collides(grid: GridMap, pose: tuple[float, float, float]) -> bool:

@@ -9,7 +9,6 @@ from nav2_wrapper.core import (
     ControllerConfig,
     Costmap,
     CostmapConfig,
-    Footprint,
     GlobalPlanner,
     GoalChecker,
     GoalCheckerConfig,
@@ -18,10 +17,11 @@ from nav2_wrapper.core import (
     RecoveryConfig,
     RecoverySequence,
 )
+from nav2_wrapper.robot_io import load_footprint
 
 from .sim import footprint_collides, room
 
-FP = Footprint.from_robot_yaml()
+FP = load_footprint()
 MAPS = {
     "open": (room(8, 6), (1.0, 1.0, 0.0), (7.0, 5.0, math.pi / 2)),
     "wall": (room(10, 6, boxes=((4.5, 0, 5.0, 4.0),)), (1.0, 1.0, 0.0), (8.5, 1.0, 0.0)),

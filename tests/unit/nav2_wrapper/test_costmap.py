@@ -5,11 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, CostmapConfig, Footprint, LaserScan
+from nav2_wrapper.core import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, CostmapConfig, RangeScan
 from nav2_wrapper.core.costs import inflation_cost
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
-FP = Footprint.from_robot_yaml()
+FP = load_footprint()
 
 
 def test_footprint_radii_from_robot_description():
@@ -60,16 +61,16 @@ def test_obstacle_marking_and_raytrace_clearing():
     cm.set_static_map(GridMap(g, 0.05))
     ranges = np.full(360, np.inf)
     ranges[180] = 1.0                            # angle 0 → obstacle at (3.5, 2.5)
-    scan = LaserScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0)
+    scan = RangeScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0)
     cm.update_scan(scan, (2.5, 2.5, 0.0))
     assert cm.cost_at(3.5 + 0.01, 2.5 + 0.01) == LETHAL
     ranges[180] = 2.0                            # the obstacle moved away: the old cell is cleared by the ray
-    cm.update_scan(LaserScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 2.5, 0.0))
+    cm.update_scan(RangeScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 2.5, 0.0))
     assert cm.cost_at(3.51, 2.51) == 0
     assert cm.cost_at(4.51, 2.51) == LETHAL
     far = np.full(360, np.inf)
     far[270] = 2.8                               # +y beam beyond obstacle_max_range (2.5 m): clears, never marks
-    cm.update_scan(LaserScan(far, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 1.0, 0.0))
+    cm.update_scan(RangeScan(far, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 1.0, 0.0))
     assert cm.cost_at(2.51, 3.81) == 0
 
 
@@ -78,7 +79,7 @@ def test_unknown_master_overridden_by_obstacle_clearing():
     cm = Costmap(CostmapConfig(inflation_layer=False, footprint=FP))
     cm.set_static_map(GridMap(g, 0.05))
     ranges = np.full(360, 2.0)
-    cm.update_scan(LaserScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 2.5, 0.0))
+    cm.update_scan(RangeScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (2.5, 2.5, 0.0))
     assert cm.cost_at(3.0, 2.5) == 0             # seen free
     assert cm.cost_at(2.51, 4.51) == LETHAL      # marked
     assert cm.cost_at(0.2, 0.2) == NO_INFORMATION
@@ -109,7 +110,7 @@ def test_rolling_window_follows_robot_and_keeps_marks():
     cm.update_origin(0.0, 0.0)
     ranges = np.full(360, np.inf)
     ranges[180] = 1.0
-    cm.update_scan(LaserScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (0.0, 0.0, 0.0))
+    cm.update_scan(RangeScan(ranges, -math.pi, 2 * math.pi / 360, 0.05, 12.0), (0.0, 0.0, 0.0))
     assert cm.cost_at(1.01, 0.01) == LETHAL
     cm.update_origin(0.5, 0.3)
     assert cm.cost_at(1.01, 0.01) == LETHAL

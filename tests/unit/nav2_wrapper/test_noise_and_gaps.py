@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import Costmap, CostmapConfig, LaserScan, Navigator
+from nav2_wrapper.core import Costmap, CostmapConfig, Navigator, RangeScan
 from nav2_wrapper.core.costs import LETHAL
 from nav2_wrapper.params import load_params
 
-from .sim import cast_scan, drive, room
+from .sim import FOOTPRINT, cast_scan, drive, room
 
 
 def noisy(std: float, dropout: float, seed: int = 0):
@@ -25,7 +25,7 @@ def noisy(std: float, dropout: float, seed: int = 0):
         hit = np.isfinite(r)
         r[hit] += rng.normal(0.0, std, int(hit.sum()))
         r[rng.random(len(r)) < dropout] = np.inf
-        return LaserScan(r, s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        return RangeScan(r, s.angle_min, s.angle_increment, s.range_min, s.range_max)
 
     return scan
 
@@ -66,13 +66,13 @@ def test_passes_a_gap_wider_than_the_footprint_width(scan: str, known: bool) -> 
 
 def test_dropout_never_clears_and_too_close_is_not_free() -> None:
     """inf_is_valid clears +inf beams to the raytrace range; -inf (closer than range_min) never clears."""
-    cfg = CostmapConfig(static_layer=False, width=6.0, height=6.0, track_unknown_space=False)
+    cfg = CostmapConfig(static_layer=False, width=6.0, height=6.0, track_unknown_space=False, footprint=FOOTPRINT)
     cfg.observation_sources[0].inf_is_valid = True
     cm = Costmap(cfg)
     cm.obstacle[60, 70] = LETHAL     # a mark 0.5 m east of the sensor at (3.0, 3.0)
     cm.obstacle[60, 50] = LETHAL     # and one 0.5 m west
     ranges = np.array([np.inf, -np.inf])  # beam 0 east (dropout), beam 1 west (too close)
-    cm.update_scan(LaserScan(ranges, 0.0, math.pi, 0.05, 12.0), (3.025, 3.025, 0.0))
+    cm.update_scan(RangeScan(ranges, 0.0, math.pi, 0.05, 12.0), (3.025, 3.025, 0.0))
     assert cm.obstacle[60, 70] != LETHAL
     assert cm.obstacle[60, 50] == LETHAL
 
@@ -82,7 +82,7 @@ def test_controller_lines_up_with_a_gap_entered_diagonally() -> None:
     turn out of it must not clip the wall end between two collision samples (it once did, in 0.05 s)."""
     from nav2_wrapper.core import ControllerConfig, GlobalPlanner, GoalChecker, HolonomicController
 
-    from .sim import FOOTPRINT, footprint_collides
+    from .sim import footprint_collides
 
     grid = room(9, 7, boxes=((4.0, 0, 4.1, 3.0), (4.0, 3.8, 4.1, 7)))   # rasterised: 0.75 m clear
     cm = Costmap(CostmapConfig(obstacle_layer=False, cost_scaling_factor=3.0, footprint=FOOTPRINT))
@@ -119,9 +119,9 @@ def test_backup_moves_away_from_a_wall_it_touches_not_into_it() -> None:
 
     data = np.zeros((80, 80), np.int8)
     data[50:52, :] = 100                     # a wall along y = 2.5 .. 2.6 m
-    cm = Costmap(CostmapConfig())
+    cm = Costmap(CostmapConfig(footprint=FOOTPRINT))
     cm.set_static_map(GridMap(data, 0.05))
-    ctl = HolonomicController(ControllerConfig())
+    ctl = HolonomicController(ControllerConfig(footprint=FOOTPRINT))
     pose = (2.0, 2.5 - 0.36, -np.pi / 2)    # the long side's end touches the wall; body-back = +y
     b = BackUp(RecoveryConfig())
     b.start(0.0, pose)

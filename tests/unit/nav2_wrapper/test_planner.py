@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, Footprint, GlobalPlanner, PlannerConfig
+from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig
+from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
-FP = Footprint.from_robot_yaml()
+FP = load_footprint()
 
 
 def costmap(data, res=0.05, track_unknown=True):

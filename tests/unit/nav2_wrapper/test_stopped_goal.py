@@ -7,10 +7,11 @@ import math
 from nav2_wrapper.core.checkers import GoalChecker, GoalCheckerConfig
 from nav2_wrapper.core.controller import ControllerConfig, HolonomicController
 from nav2_wrapper.params import load_params
+from nav2_wrapper.robot_io import load_footprint
 
 
 def test_stopped_checker_requires_rest() -> None:
-    gc = GoalChecker(GoalCheckerConfig(trans_stopped_velocity=0.25, rot_stopped_velocity=0.25))
+    gc = GoalChecker(GoalCheckerConfig(stopped=True, trans_stopped_velocity=0.25, rot_stopped_velocity=0.25))
     goal = (1.0, 1.0, 0.0)
     pose = (1.1, 1.0, 0.1)
     assert not gc.is_goal_reached(pose, goal, (0.0, 0.0, 1.0))   # still turning fast
@@ -21,7 +22,7 @@ def test_stopped_checker_requires_rest() -> None:
 
 
 def test_turn_rate_is_capped_so_the_base_can_brake() -> None:
-    cfg = ControllerConfig()
+    cfg = ControllerConfig(footprint=load_footprint())
     ctl = HolonomicController(cfg)
     for err in (0.05, 0.2, 0.6):
         wz = abs(ctl._wz_toward(err, 0.0))
@@ -34,5 +35,6 @@ def test_profiles_use_the_stopped_checker() -> None:
     for profile in ("sim", "slam", "default"):
         loaded = load_params(profile, map_topic="/map", odom_topic="/odom", scan_topic="/scan")
         gc = loaded.config.goal_checker
+        assert gc.stopped, profile
         assert gc.trans_stopped_velocity == 0.25, profile
         assert gc.rot_stopped_velocity == 0.25, profile

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from rbnx.demo_goals import choose_goals, parse_detail, path_length
+from rbnx.demo.goals import choose_goals, parse_detail, path_length
 
 KITCHEN = {"island_east": [5.8, 3.0], "pantry": [8.3, 6.8], "dining": [2.5, 6.2], "fridge": [8.5, 2.0]}
 

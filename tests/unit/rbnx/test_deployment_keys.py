@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.deployment import StateNotFound, locate_state
+from rbnx.boot.deployment import StateNotFound, locate_state
+from rbnx.boot.entry import EntryRunner, Timing
+from rbnx.boot.statefile import deployment_key, find_states, run_dir, state_path, write_state
 from rbnx.models import load_deploy
-from rbnx.runner import EntryRunner, Timing
-from rbnx.statefile import deployment_key, find_states, run_dir, state_path, write_state
 from robonix_nav_data import resources
 
 

@@ -11,9 +11,9 @@ import yaml
 
 from nav2_wrapper.core import GoalRecord
 from nav2_wrapper.tracing import GoalSpans
+from rbnx.boot.entry import EntryRunner, Timing
 from rbnx.gateway import ControlError, Entry, LifecycleControl
 from rbnx.models import ManifestProblems, load_deploy
-from rbnx.runner import EntryRunner, Timing
 from robonix_api import telemetry
 
 PKG = {"manifestVersion": 1, "package": {"name": "p", "version": "1", "description": "d", "license": "MIT"},

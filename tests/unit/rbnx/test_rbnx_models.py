@@ -78,7 +78,7 @@ def test_schema_errors_one_line_each(tmp_path: Path) -> None:
                                             {"name": "c"}, "str"]})
     lines = problems(d)
     assert lines == [
-        f"{d}: manifestVersion: input should be greater than or equal to 1",
+        f"{d}: manifestVersion: must be >= 1",
         f"{d}: name: string should have at least 1 character",
         f"{d}: system.atlas.listen: expected HOST:PORT, got 'nope'",
         f"{d}: service[0].name: must not be empty",
@@ -167,7 +167,7 @@ def test_package_manifest_rules(tmp_path: Path) -> None:
         load_package(root)
     f = root / "package_manifest.yaml"
     assert ei.value.lines == [
-        f"{f}: manifestVersion: input should be greater than or equal to 1",
+        f"{f}: manifestVersion: must be >= 1",
         f"{f}: package.version: missing required key",
         f"{f}: package.description: missing required key",
         f"{f}: package.license: missing required key",

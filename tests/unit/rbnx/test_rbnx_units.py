@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from rbnx.backoff import Backoff
+from rbnx.boot.backoff import Backoff
+from rbnx.boot.progress import ProgressView, Row, plain_line, render_table
+from rbnx.boot.statefile import read_state, state_path, write_state
 from rbnx.envexpand import UndefinedVariable, apply_env_section, expand_str, expand_tree
-from rbnx.progress import ProgressView, Row, plain_line, render_table
-from rbnx.statefile import read_state, state_path, write_state
 
 
 def test_expand_forms() -> None:

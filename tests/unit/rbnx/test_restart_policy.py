@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from rbnx.boot.supervise import RestartPolicy, RestartTracker, exit_text
 from rbnx.models import ManifestProblems, load_deploy
-from rbnx.supervise import RestartPolicy, RestartTracker, exit_text
 
 REPO = Path(__file__).resolve().parents[3]
 
@@ -85,8 +85,8 @@ service:
     text = "\n".join(exc.value.lines)
     assert "system.atlas.restart: input should be 'never', 'on-failure' or 'always'" in text
     assert "service[0].restart: input should be 'never', 'on-failure' or 'always'" in text
-    assert "service[0].restart_max: input should be greater than or equal to 0" in text
-    assert "service[0].restart_backoff_s: input should be greater than 0" in text
+    assert "service[0].restart_max: must be >= 0" in text
+    assert "service[0].restart_backoff_s: must be > 0" in text
 
 
 def test_defaults_without_restart_keys_never_restart(tmp_path: Path) -> None:

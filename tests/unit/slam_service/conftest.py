@@ -7,10 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from robonix_eval.synthetic import OdomDrift, Recording, World, apartment_world, drive
 from slam_service.core import SlamConfig, SlamEngine
-from slam_service.core.synthetic import OdomNoise, Recording, World, apartment_world, drive
 
-DRIFT = OdomNoise(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
+DRIFT = OdomDrift(trans_scale=0.03, rot_scale=0.03, rot_bias_per_m=0.02, sigma_xy=0.003, sigma_theta=0.003)
 
 
 def two_lap_apartment() -> World:

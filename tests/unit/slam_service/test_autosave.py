@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from robonix_common.geometry import compose
+from robonix_eval.synthetic import apartment_world, drive
 from slam_service.core import SlamConfig, SlamEngine
-from slam_service.core.synthetic import apartment_world, drive
 from slam_service.maps import Autosave, MapIdError, MapStore, resume_engine
 
 

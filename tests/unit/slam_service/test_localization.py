@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from robonix_api.mapfile import load_map_yaml, save_map_yaml
+from robonix_eval.synthetic import apartment_world, drive
 from slam_service.core import SlamEngine
-from slam_service.core.synthetic import apartment_world, drive
 
 from .conftest import DRIFT, MappingRun
 

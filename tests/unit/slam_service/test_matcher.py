@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from robonix_common.geometry import transform_points
+from robonix_eval.synthetic import apartment_world, drive
 from slam_service.core import LookupGrid, match_scan, prepare_scan
 from slam_service.core.matcher import required_margin
-from slam_service.core.synthetic import apartment_world, drive
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from slam_service.core import OccupancyGrid
+from slam_service.core import LogOddsGrid
 
 
 def _cell(grid, x: float, y: float) -> int:
@@ -14,7 +14,7 @@ def _cell(grid, x: float, y: float) -> int:
 
 
 def test_free_along_rays_occupied_at_hits() -> None:
-    g = OccupancyGrid(0.05)
+    g = LogOddsGrid(0.05)
     ang = np.linspace(-0.3, 0.3, 61)
     hits = np.stack([2.0 * np.ones_like(ang), 2.0 * np.tan(ang)], axis=1)  # a wall at x = 2.0..2.05
     hits[:, 0] += 0.01
@@ -29,7 +29,7 @@ def test_free_along_rays_occupied_at_hits() -> None:
 
 
 def test_one_grazing_miss_does_not_erase_a_wall() -> None:
-    g = OccupancyGrid(0.05)
+    g = LogOddsGrid(0.05)
     g.integrate(np.array([0.0, 0.0]), np.array([[1.02, 0.0]]))
     g.integrate(np.array([0.0, 0.0]), np.array([[1.02, 0.0]]))
     g.integrate(np.array([0.0, 0.0]), np.array([[2.02, 0.0]]))  # one ray passes through the cell
@@ -37,7 +37,7 @@ def test_one_grazing_miss_does_not_erase_a_wall() -> None:
 
 
 def test_grid_grows_in_chunks_and_keeps_content() -> None:
-    g = OccupancyGrid(0.05, chunk=16)
+    g = LogOddsGrid(0.05, chunk=16)
     g.integrate(np.array([0.0, 0.0]), np.array([[0.52, 0.0]]))
     g.integrate(np.array([0.0, 0.0]), np.array([[0.52, 0.0]]))
     before = g.logodds.shape

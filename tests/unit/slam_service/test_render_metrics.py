@@ -9,7 +9,8 @@ import pytest
 from PIL import Image
 
 from robonix_common.grid import GridMap
-from slam_service.core import align_se2, ate_rmse, occupied_iou, render_map_png
+from slam_service.core import align_se2, ate_rmse, occupied_iou
+from slam_service.render import render_map_png
 
 
 def test_png_colours_and_orientation() -> None:
@@ -33,7 +34,7 @@ def test_png_overlays_and_scale() -> None:
     assert img.shape == (80, 120, 3)
     assert (img[..., 0] > 200).sum() > 0
     assert ((img[..., 0] > 200) & (img[..., 1] < 50)).any()
-    with pytest.raises(ValueError, match="scale must be >= 1, got 0"):
+    with pytest.raises(ValueError, match="scale must be >= 1"):
         render_map_png(g, scale=0)
 
 
@@ -46,7 +47,7 @@ def test_ate_alignment() -> None:
     assert ate_rmse(est, gt) > 1.0
     assert ate_rmse(est, gt, align=True) < 1e-9
     assert align_se2(est, gt)[2] == pytest.approx(-th)
-    with pytest.raises(ValueError, match="trajectories must have the same non-zero length"):
+    with pytest.raises(ValueError, match="same non-zero length"):
         ate_rmse(est[:3], gt)
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from robonix_common.geometry import compose
+from robonix_eval.synthetic import apartment_world, drive
 from slam_service.core import Scan, SlamConfig, SlamEngine
-from slam_service.core.synthetic import apartment_world, drive
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from slam_service.core import SlamEngine, load_session, save_session
-from slam_service.core.synthetic import apartment_world, drive
+from robonix_eval.synthetic import apartment_world, drive
+from slam_service.core import SlamEngine
+from slam_service.session_io import load_session, save_session
 
 
 def test_session_snapshot_survives_later_scans(tmp_path: Path) -> None:

@@ -42,10 +42,10 @@ def drive(stub: Any, command: int, config_json: str, with_token: bool = True) ->
         return stub.Driver(lifecycle_pb2.Driver_Request(command=command, config_json=config_json), timeout=120,
                            metadata=auth.metadata() if with_token else None), ""
     except grpc.RpcError as exc:
-        code, details = exc.code(), exc.details() or ""
-    expected = grpc.StatusCode.INVALID_ARGUMENT if with_token else grpc.StatusCode.UNAUTHENTICATED
-    assert code == expected, f"{code.name}: {details[:300]}"
-    return None, details
+        expected = grpc.StatusCode.INVALID_ARGUMENT if with_token else grpc.StatusCode.UNAUTHENTICATED
+        if exc.code() != expected:  # a refusal must be the right one (pytest.raises cannot express "may raise")
+            pytest.fail(f"{exc.code().name}: {(exc.details() or '')[:300]}")
+        return None, exc.details() or ""
 
 
 def fuzz_driver(dep: Deployment, provider: str, stub: Any) -> None:

@@ -10,11 +10,11 @@ import ast
 import importlib
 import json
 import sys
+from pathlib import Path
 
 
 def check(path, checked, missing):
-    with open(path) as fh:
-        tree = ast.parse(fh.read(), path)
+    tree = ast.parse(Path(path).read_text(), path)
     import robonix_api
 
     providers = {}

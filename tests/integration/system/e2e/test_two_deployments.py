@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
-from rbnx.demo_boot import pick_domain_id
-from rbnx.statefile import state_path
+from rbnx.boot.statefile import state_path
+from rbnx.demo.boot import pick_domain_id
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 KITCHEN_GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the start pose

@@ -25,7 +25,7 @@ import grpc
 import pytest
 from support.procs import wait_until
 
-import rbnx.procs as procs
+import rbnx.boot.procs as procs
 from atlas.server import AtlasServer
 from rbnx.atlas_rpc import CMD, Atlas, Driver, driver_capability
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from rbnx import deploytoken
-from rbnx.statefile import write_state
+from rbnx.boot import deploytoken
+from rbnx.boot.statefile import write_state
 from robonix_api.auth import TOKEN_ENV
 
 

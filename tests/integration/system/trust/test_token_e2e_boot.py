@@ -16,7 +16,7 @@ import pytest
 from support.boot import RbnxBoot, rbnx_cmd
 from support.procs import REPO
 
-from rbnx.demo_boot import pick_domain_id
+from rbnx.demo.boot import pick_domain_id
 from robonix_api.auth import TOKEN_ENV
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc, lifecycle_pb2, navigation_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rc

@@ -70,8 +70,8 @@ def test_grpc_driver_and_navigate_need_the_token_status_does_not(provider: Servi
 
     assert _navigate(ep, [(auth.METADATA_KEY, TOKEN)]).accepted
     with auth.channel(ep) as ch:  # the SDK's channel sends $ROBONIX_DEPLOY_TOKEN itself
-        reply = rc.RobonixServiceNavigationNavigateStub(ch).Navigate(navigation_pb2.Navigate_Request(), timeout=10)
-        assert reply.accepted
+        nav = rc.RobonixServiceNavigationNavigateStub(ch)
+        assert nav.Navigate(navigation_pb2.Navigate_Request(), timeout=10).accepted
     with grpc.insecure_channel(ep) as ch:  # read-only: open
         st = rc.RobonixServiceNavigationNavigateStatusStub(ch).GetNavigationStatus(
             navigation_pb2.GetNavigationStatus_Request(), timeout=10)

@@ -1,0 +1,145 @@
+"""Navigation in clutter: generated post fields, each proven passable, crossed by the in-process stack.
+
+    python bench/clutter_suite.py [--worlds 200] [--seeds 3] [--noise both|on|off] [--controller pursuit|mppi]
+                                  [--jobs 2] [--out bench/results/clutter_suite.json]
+
+Worlds come from :mod:`robonix_eval.clutter` (cellular automaton on a 0.15 m grid, fill drawn uniformly
+from 10–35 %, two smoothing passes; walls on three sides; start 1 m above the south wall, goal 10 m above
+the start). A world is used only when the configuration-space proof shows that the 0.70 × 0.50 m
+rectangle grown by ``--margin`` can rotate and translate from start to goal; the rejected draws are
+counted. Each kept world is driven once per seed and noise setting by the sim + SLAM + navigation cores
+in one process (unknown map: navigation plans on the SLAM map as it grows).
+
+A run succeeds only if the goal SUCCEEDED **and** the base touched nothing on the way (a contact is a
+failure). Time is compared with the shortest path's length at the controller's cruise speed; that length
+is a lower bound (the centre's shortest route through cells free at some heading), so the ratio is
+pessimistic.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np
+
+from robonix_eval.clutter import ClutterWorld, generate
+
+FILL = (0.10, 0.35)
+
+
+def make_worlds(n: int, margin: float, first_seed: int = 0) -> tuple[list[ClutterWorld], int]:
+    """The first ``n`` passable worlds from consecutive seeds, and how many draws were rejected."""
+    worlds, rejected, seed = [], 0, first_seed
+    while len(worlds) < n:
+        fill = float(np.random.default_rng(seed + 7_000_000).uniform(*FILL))
+        w = generate(seed, fill, margin=margin, survive=3)
+        if w.passable:
+            worlds.append(w)
+        else:
+            rejected += 1
+        seed += 1
+        if seed - first_seed > 50 * n + 100:
+            raise SystemExit(f"clutter_suite: only {len(worlds)} passable worlds in {seed - first_seed} draws")
+    return worlds, rejected
+
+
+def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
+    """One crossing; runs in a worker process (everything it needs travels in ``job``)."""
+    from hal_panda_mobile.sim import LidarNoise, OdomNoise
+    from robonix_eval.pipeline import Pipeline, PipelineOptions
+
+    scene, seed, shortest, fill, noisy, controller, timeout = job
+    if noisy:
+        opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
+    else:
+        opts = PipelineOptions(scene=scene, seed=seed, controller=controller, odom_noise=OdomNoise(),
+                               lidar_noise=LidarNoise())
+    t0 = time.perf_counter()
+    pipe = Pipeline(opts)
+    pipe.run_for(0.5)
+    gx, gy = scene["waypoints"]["goal"]
+    res = pipe.navigate(gx, gy, math.pi / 2, timeout=timeout)
+    cruise = pipe.params.config.controller.desired_linear_vel
+    return {"world": scene["name"], "fill": fill, "seed": seed, "noise": noisy, "state": res.state,
+            "detail": res.detail, "collisions": res.collisions, "recoveries": res.recoveries,
+            "success": res.succeeded and res.collisions == 0, "time": res.time,
+            "shortest_lower_bound": shortest, "time_ratio": res.time / (shortest / cruise),
+            "wall_s": time.perf_counter() - t0}
+
+
+def summarise(rows: list[dict]) -> dict:
+    def block(sel: list[dict]) -> dict:
+        ok = [r for r in sel if r["success"]]
+        return {"runs": len(sel), "succeeded": len(ok), "success_rate": len(ok) / len(sel) if sel else math.nan,
+                "collisions": sum(r["collisions"] for r in sel),
+                "runs_with_contact": sum(r["collisions"] > 0 for r in sel),
+                "time_ratio_median": statistics.median(r["time_ratio"] for r in ok) if ok else math.nan}
+
+    out = {"all": block(rows)}
+    for noisy in (True, False):
+        sel = [r for r in rows if r["noise"] == noisy]
+        if sel:
+            out["noise" if noisy else "no_noise"] = block(sel)
+    for lo, hi in ((0.10, 0.20), (0.20, 0.28), (0.28, 0.36)):
+        sel = [r for r in rows if lo <= r["fill"] < hi]
+        if sel:
+            out[f"fill_{lo:.2f}-{hi:.2f}"] = block(sel)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--worlds", type=int, default=200)
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--noise", choices=("both", "on", "off"), default="both")
+    ap.add_argument("--controller", choices=("profile", "pursuit", "mppi"), default="profile",
+                    help="the sim profile's controller, or override it")
+    ap.add_argument("--margin", type=float, default=0.05, help="m of clearance the passability proof demands")
+    ap.add_argument("--timeout", type=float, default=120.0, help="s of sim time per crossing")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "clutter_suite.json"))
+    a = ap.parse_args()
+    if not (1 <= a.worlds <= 10_000 and 1 <= a.seeds <= 100 and 1 <= a.jobs <= 64 and 0 <= a.margin <= 0.5):
+        raise SystemExit("clutter_suite: --worlds 1..10000, --seeds 1..100, --jobs 1..64, --margin 0..0.5")
+    t0 = time.perf_counter()
+    worlds, rejected = make_worlds(a.worlds, a.margin)
+    print(f"{len(worlds)} passable worlds ({rejected} draws rejected by the proof) in {time.perf_counter() - t0:.0f} s",
+          flush=True)
+    noises = {"both": (True, False), "on": (True,), "off": (False,)}[a.noise]
+    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout)
+            for w in worlds for s in range(a.seeds) for n in noises]
+    rows: list[dict] = []
+    with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool:
+        for row in pool.map(run_one, jobs):
+            rows.append(row)
+            if not row["success"]:
+                print(f"  {row['world']} seed {row['seed']} noise {row['noise']}: {row['state']}, "
+                      f"{row['collisions']} contacts: {row['detail'][:80]}", flush=True)
+            if len(rows) % 20 == 0:
+                ok = sum(r["success"] for r in rows)
+                print(f"{len(rows)}/{len(jobs)} runs, {ok} succeeded", flush=True)
+    summary = summarise(rows)
+    for k, v in summary.items():
+        print(f"{k:<16} {v['succeeded']:>4}/{v['runs']:<4} success {v['success_rate']:.3f}  contacts "
+              f"{v['collisions']:>3} in {v['runs_with_contact']} runs  time/shortest median "
+              f"{v['time_ratio_median']:.2f}")
+    out = Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps({"args": vars(a), "rejected_draws": rejected, "summary": summary, "runs": rows,
+                               "machine": platform.platform(), "wall_s": time.perf_counter() - t0}, indent=1))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

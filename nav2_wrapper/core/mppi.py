@@ -1,0 +1,239 @@
+"""A predictive sampling controller (MPPI) for the holonomic base, in the spirit of Nav2's MPPIController
+with its Omni motion model.
+
+Each step perturbs the previous optimal control sequence (vx, vy, wz over ``time_steps`` × ``model_dt``)
+with Gaussian noise, rolls the perturbed sequences out through the omni kinematics, scores every
+trajectory with a handful of critics (collision, costmap cost, path following and progress, goal, heading,
+smoothness), and blends them with a softmax of temperature ``temperature``. The first control of the blend
+is the command; the rest warm-starts the next step.
+
+Why a subclass of the pursuit controller: the heading targets (path direction, the passage-fitting yaw,
+the goal yaw), the exact footprint trajectory check and the escape move are already there and are what
+the navigator's recoveries call. MPPI replaces only how a command is chosen; the command it picks is
+checked with the same exact footprint test, and if it fails, the pursuit's own candidates and escape run
+instead, so switching controllers never loosens the safety check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.params import param
+
+from .controller import ControllerConfig, ControlOutput, HolonomicController
+from .costmap import Costmap
+from .costs import INSCRIBED, LETHAL, NO_INFORMATION
+
+
+@dataclass
+class MppiConfig:
+    """MPPI sampling parameters (Nav2 names and defaults where Nav2 has them) and the critics' weights.
+
+    A critic weight of 0 switches that critic off; the collision critic cannot be switched off."""
+
+    batch_size: int = param(1000, "sampled control sequences per step", ge=16, le=20000)
+    time_steps: int = param(56, "steps per sampled sequence (horizon = time_steps * model_dt)", ge=2, le=500)
+    model_dt: float = param(0.05, "time between two steps of a sequence", unit="s", gt=0, le=1.0)
+    vx_std: float = param(0.2, "sampling noise on vx", unit="m/s", ge=0)
+    vy_std: float = param(0.2, "sampling noise on vy", unit="m/s", ge=0)
+    wz_std: float = param(0.4, "sampling noise on wz", unit="rad/s", ge=0)
+    temperature: float = param(0.3, "softmax temperature: lower follows the best sample more closely", gt=0)
+    collision_stride: int = param(2, "steps between footprint checks of the samples", ge=1, le=50)
+    outline_spacing: float = param(0.1, "spacing of the footprint outline points checked for the samples",
+                                   unit="m", gt=0, le=1.0)
+    seed: int = param(0, "noise seed: the same seed and inputs give the same commands", ge=0)
+    collision_cost: float = param(10000.0, "cost of a sample whose footprint adds a lethal contact", gt=0)
+    cost_weight: float = param(3.0, "weight of the mean normalised costmap cost along a sample", ge=0)
+    path_follow_weight: float = param(5.0, "weight of the end point's distance to where the horizon should reach",
+                                      ge=0)
+    progress_weight: float = param(4.0, "reward per metre of path gained by a sample", ge=0)
+    path_align_weight: float = param(10.0, "weight of a sample's mean distance to the path", ge=0)
+    goal_weight: float = param(5.0, "near the goal: weight of a sample's mean distance to it", ge=0)
+    goal_distance: float = param(1.0, "distance to the goal where the goal critic replaces path following",
+                                 unit="m", gt=0)
+    heading_weight: float = param(2.0, "weight of the mean heading error (path direction, passage yaw, goal yaw)",
+                                  ge=0)
+    twirling_weight: float = param(0.1, "weight of the mean squared turn rate", ge=0)
+    smoothness_weight: float = param(0.5, "weight of the mean squared change between consecutive controls", ge=0)
+
+
+class MppiController(HolonomicController):
+    """Drop-in replacement for :class:`HolonomicController` that chooses commands by MPPI."""
+
+    def __init__(self, cfg: ControllerConfig | None = None, mppi: MppiConfig | None = None) -> None:
+        super().__init__(cfg)
+        self.mppi = mppi or MppiConfig()
+        m = self.mppi
+        self._rng = np.random.default_rng(m.seed)
+        self._u = np.zeros((m.time_steps, 3))
+        self._sample_points = self.cfg.footprint.outline_points(m.outline_spacing)
+        self.last_samples: NDArray[np.float64] | None = None   # (K, T, 3) poses of the last step, for display
+
+    def set_path(self, path: NDArray[np.float64]) -> None:
+        super().set_path(path)
+        if hasattr(self, "_u"):
+            self._u[:] = 0.0
+
+    def compute(self, pose: Pose2D, vel: Pose2D, goal: Pose2D, costmap: Costmap, dt: float,
+                xy_reached: bool = False) -> ControlOutput:
+        """One control step (same contract as the pursuit controller's)."""
+        if len(self.path) == 0 or xy_reached:
+            # the final turn in place is the pursuit's job: nothing to predict there
+            return super().compute(pose, vel, goal, costmap, dt, xy_reached)
+        i = self._closest(pose[0], pose[1])
+        remaining = self.remaining(pose)
+        target = self._heading_target(i, pose, goal, costmap)
+        cmd = self._optimise(pose, vel, goal, costmap, i, target)
+        cand = np.array([cmd])
+        if not self.trajectory_hits(cand, pose, costmap)[0]:
+            return ControlOutput(*cmd, False, remaining, "mppi")
+        fallback = super().compute(pose, vel, goal, costmap, dt, xy_reached)
+        self._u[:] = 0.0
+        fallback.detail = "mppi fallback"
+        return fallback
+
+    # ---- the optimiser -----------------------------------------------------------------------------------
+    def _heading_target(self, i: int, pose: Pose2D, goal: Pose2D, costmap: Costmap) -> float:
+        """The yaw the body should hold: the passage-fitting yaw in a narrow spot, else the path direction
+        (either end leading), near the goal the goal's yaw."""
+        th = pose[2]
+        if math.hypot(goal[0] - pose[0], goal[1] - pose[1]) < self.cfg.rotate_to_goal_dist:
+            return float(goal[2])
+        passage = self._passage_yaw(i, th, costmap)
+        if passage is not None:
+            return self._nearest_end(passage, th)
+        return self._nearest_end(self._path_yaw(i, self._half_length, th, ahead=True), th)
+
+    def _limits(self) -> NDArray[np.float64]:
+        c = self.cfg
+        return np.array([c.max_vel_x, c.max_vel_y, c.max_vel_theta]) * self.speed_limit
+
+    def _sample(self, pose: Pose2D, vel: Pose2D) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Perturbed control sequences (K, T, 3), limited in velocity and acceleration, and their rollouts
+        through the omni kinematics (body-frame velocities rotated by the heading at each step's start)."""
+        from ._mppi_kernels import limit_and_rollout
+
+        m, c = self.mppi, self.cfg
+        std = np.array([m.vx_std, m.vy_std, m.wz_std])
+        u = self._u[None] + self._rng.standard_normal((m.batch_size, m.time_steps, 3)) * std
+        u[0] = self._u             # the previous optimum itself is always a candidate
+        u[1] = 0.0                 # and so is stopping
+        acc = np.array([c.acc_lim_x, c.acc_lim_y, c.acc_lim_theta]) * m.model_dt
+        traj = np.empty_like(u)
+        limit_and_rollout(u, np.asarray(vel, dtype=float), np.asarray(pose, dtype=float), self._limits(), acc,
+                          float(m.model_dt), traj)
+        return u, traj
+
+    def _optimise(self, pose: Pose2D, vel: Pose2D, goal: Pose2D, costmap: Costmap, i: int,
+                  target: float) -> tuple[float, float, float]:
+        m = self.mppi
+        u, traj = self._sample(pose, vel)
+        cost = self._score(pose, goal, costmap, traj, u, i, target)
+        cost -= cost.min()
+        w = np.exp(-cost / max(m.temperature, 1e-6))
+        w /= w.sum()
+        self._u = np.tensordot(w, u, axes=1)
+        self.last_samples = traj
+        cmd = self._u[0].copy()
+        self._u = np.vstack([self._u[1:], self._u[-1:]])   # warm start: shift by one step
+        return float(cmd[0]), float(cmd[1]), float(cmd[2])
+
+    # ---- critics -----------------------------------------------------------------------------------------
+    def _score(self, pose: Pose2D, goal: Pose2D, costmap: Costmap, traj: NDArray[np.float64],
+               u: NDArray[np.float64], i: int, target: float) -> NDArray[np.float64]:
+        cr = self.mppi
+        cost = np.zeros(len(traj))
+        cost += cr.collision_cost * self._collisions(pose, traj, costmap)
+        cost += cr.cost_weight * self._centre_costs(traj, costmap)
+        dgoal = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
+        if dgoal < cr.goal_distance:
+            cost += cr.goal_weight * np.hypot(traj[..., 0] - goal[0], traj[..., 1] - goal[1]).mean(axis=1)
+        else:
+            cost += self._path_costs(traj, i, costmap)
+        dyaw = np.abs(wrap_angle(traj[..., 2] - target))
+        cost += cr.heading_weight * dyaw.mean(axis=1)
+        cost += cr.twirling_weight * np.mean(u[..., 2] ** 2, axis=1)
+        cost += cr.smoothness_weight * np.mean(np.diff(u, axis=1) ** 2, axis=(1, 2))
+        return cost
+
+    def _collisions(self, pose: Pose2D, traj: NDArray[np.float64], costmap: Costmap) -> NDArray[np.float64]:
+        """1 for a trajectory whose sampled footprint outline touches a lethal cell the robot does not
+        already touch (those are forgiven, as in the pursuit's check), else 0."""
+        stride = max(1, self.mppi.collision_stride)
+        sub = traj[:, stride - 1::stride]
+        k, t = sub.shape[:2]
+        poses = sub.reshape(-1, 3)
+        centre = costmap.cost_at(poses[:, 0], poses[:, 1], outside=0)
+        near = (centre >= self._possible_collision_cost(costmap)) & (centre != NO_INFORMATION)
+        hit = np.zeros(len(poses), dtype=bool)
+        if near.any():
+            fc = costmap.footprint_costs(poses[near], self._sample_points, outside=0)
+            lethal = fc == LETHAL
+            if lethal.any():
+                start = costmap.footprint_costs(np.array([pose], dtype=float), self._sample_points, outside=0)
+                if (start == LETHAL).any():   # already touching: count only clearly deeper contacts
+                    lethal &= (costmap.cost_at(poses[near, 0], poses[near, 1], outside=0) >= INSCRIBED)[:, None]
+            hit[near] = lethal.any(axis=1)
+        return hit.reshape(k, t).any(axis=1).astype(float)
+
+    def _possible_collision_cost(self, costmap: Costmap) -> int:
+        """Centre cost below which no footprint point can touch a lethal cell (the circumscribed radius)."""
+        from .costs import inflation_cost
+
+        fp = costmap.cfg.footprint
+        val = int(inflation_cost(fp.circumscribed_radius, fp.inscribed_radius, costmap.cfg.inflation_radius,
+                                 costmap.cfg.cost_scaling_factor))
+        return max(1, val)
+
+    def _centre_costs(self, traj: NDArray[np.float64], costmap: Costmap) -> NDArray[np.float64]:
+        c = costmap.cost_at(traj[..., 0], traj[..., 1], outside=0).astype(float)
+        c[c == NO_INFORMATION] = 0.0
+        return np.minimum(c, INSCRIBED).mean(axis=1) / INSCRIBED
+
+    def _path_costs(self, traj: NDArray[np.float64], i: int, costmap: Costmap) -> NDArray[np.float64]:
+        """Follow (end point toward the point the horizon should reach), align (stay near the path) and
+        progress (arc length gained), all against the path ahead of the robot.
+
+        The path ahead is rasterised on the local costmap's grid and a distance transform gives, for every
+        cell, the distance to the path and the arc length of its nearest path point: each trajectory pose is
+        then two array lookups, whatever the number of samples."""
+        cr, m, c = self.mppi, self.mppi, self.cfg
+        horizon = m.time_steps * m.model_dt * c.desired_linear_vel * self.speed_limit
+        j_end = int(np.searchsorted(self._cum, self._cum[i] + horizon + 0.5)) + 1
+        ahead = self.path[i:j_end]
+        cum = self._cum[i:j_end] - self._cum[i]
+        dist, arc = self._path_field(ahead, cum, costmap)
+        col, row = costmap.world_to_cell(traj[..., 0], traj[..., 1])
+        rows, cols = dist.shape
+        np.clip(col, 0, cols - 1, out=col)
+        np.clip(row, 0, rows - 1, out=row)
+        align = dist[row, col].mean(axis=1)
+        gained = arc[row[:, -1], col[:, -1]]
+        j_goal = int(np.searchsorted(cum, min(horizon, float(cum[-1]))))
+        aim = ahead[min(j_goal, len(ahead) - 1)]
+        follow = np.hypot(traj[:, -1, 0] - aim[0], traj[:, -1, 1] - aim[1])
+        return cr.path_follow_weight * follow + cr.path_align_weight * align - cr.progress_weight * gained
+
+    @staticmethod
+    def _path_field(ahead: NDArray[np.float64], cum: NDArray[np.float64],
+                    costmap: Costmap) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per local-costmap cell: metres to the nearest point of ``ahead`` and that point's arc length."""
+        from scipy.ndimage import distance_transform_edt
+
+        rows, cols = costmap.shape
+        col, row = costmap.world_to_cell(ahead[:, 0], ahead[:, 1])
+        inside = (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
+        arc_at = np.zeros((rows, cols))
+        seed = np.ones((rows, cols), dtype=bool)
+        if not inside.any():   # path ahead entirely off the local window: only its first point matters
+            col, row = np.clip(col[:1], 0, cols - 1), np.clip(row[:1], 0, rows - 1)
+            inside = np.ones(1, dtype=bool)
+        seed[row[inside], col[inside]] = False
+        arc_at[row[inside][::-1], col[inside][::-1]] = cum[inside][::-1]   # first visit wins on repeats
+        dist, (ir, ic) = distance_transform_edt(seed, return_indices=True)
+        return dist * costmap.resolution, arc_at[ir, ic]

@@ -1,0 +1,27 @@
+"""One module per `rbnx` command. Each owns its argparse setup and its work:
+
+- ``register(subparsers)`` adds the command's parser (and aliases) and sets ``run`` as its default;
+- ``run(args) -> int`` does the work and returns the exit code (0 ok, 1 runtime failure, 2 bad input).
+
+:mod:`rbnx.cli` only assembles them in :data:`COMMANDS` order (the order ``rbnx --help`` lists them) and
+maps errors to exit codes. Shared helpers live in :mod:`rbnx.commands.common` and
+:mod:`rbnx.commands.atlas_view`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Command modules in the order `rbnx --help` lists them.
+COMMANDS: tuple[str, ...] = (
+    "boot", "shutdown", "build", "start", "validate", "caps", "contracts", "describe", "tools", "channels",
+    "inspect", "logs", "map_card", "lifecycle", "token", "demo", "navigate", "nav_status", "cancel", "record",
+    "replay", "dashboard", "init",
+)
+
+
+def register_all(sub: Any) -> None:
+    """Add every command's parser to ``sub`` (an argparse subparsers action)."""
+    for name in COMMANDS:
+        importlib.import_module(f"rbnx.commands.{name}").register(sub)
