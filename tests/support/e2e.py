@@ -17,7 +17,7 @@ from .procs import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
-__all__ = ["SIM_DEPLOY", "alive", "e2e_env", "grpc_endpoint", "navigate", "rbnx_cmd", "recorded_pids", "wait_until"]
+__all__ = ["SIM_DEPLOY", "e2e_env", "grpc_endpoint", "navigate", "rbnx_cmd", "recorded_pids", "wait_until"]
 
 
 def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
@@ -30,22 +30,6 @@ def e2e_env(tmp: Path, **extra: str) -> dict[str, str]:
         env.pop(name, None)
     env.update(extra)
     return env
-
-
-def _stat(pid: int) -> list[str] | None:
-    try:
-        data = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return None
-    return data[data.rfind(")") + 2:].split()
-
-
-def alive(pid: int, start_ticks: int | None = None) -> bool:
-    """Running, not a zombie, and (when given) the same process as recorded — a reused PID is not ours."""
-    f = _stat(pid)
-    if not f or f[0] in "ZX":
-        return False
-    return start_ticks is None or int(f[19]) == int(start_ticks)
 
 
 def recorded_pids(state_file: Path) -> list[tuple[str, int, int | None]]:

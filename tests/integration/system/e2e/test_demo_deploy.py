@@ -15,9 +15,10 @@ import time
 from pathlib import Path
 
 import pytest
-from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
+from support.e2e import SIM_DEPLOY, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import pid_alive
 from robonix_api.types import LifecycleState
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
@@ -60,7 +61,7 @@ def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: P
 
         proc.send_signal(signal.SIGINT)
         assert proc.wait(120) == 0, out.read_text()
-        wait_until(lambda: not [p for p in pids if alive(p[1], p[2])], 30, "every recorded process to exit")
+        wait_until(lambda: not [p for p in pids if pid_alive(p[1], p[2])], 30, "every recorded process to exit")
         assert not list((tmp_path / "state").glob("boot-*.json")), "state file left behind"
         for name in ENTRIES:
             log = (tmp_path / "logs" / f"{name}.log").read_text()
@@ -108,7 +109,7 @@ def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     assert goal["collision_count"] == 0
     assert summary["leftover_processes"] == []
     assert summary["boot_exit_code"] == 0
-    left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if alive(p[1], p[2])]
+    left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if pid_alive(p[1], p[2])]
     assert not left, left
 
 
@@ -134,5 +135,5 @@ def test_demo_sigint_mid_goal_shuts_down_and_exits_130(tmp_path: Path) -> None:
     assert summary["success"] is False
     assert summary["goals"][0]["state"] == "CANCELED"
     assert summary["leftover_processes"] == []
-    left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if alive(p[1], p[2])]
+    left = [p for p in recorded_pids(out / "logs" / "rbnx-boot.json") if pid_alive(p[1], p[2])]
     assert not left, left

@@ -15,10 +15,11 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from support.e2e import SIM_DEPLOY, alive, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
+from support.e2e import SIM_DEPLOY, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 from rbnx.boot.statefile import state_path
 from rbnx.demo.boot import pick_domain_id
+from robonix_api.procs import pid_alive
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 KITCHEN_GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the start pose
@@ -87,9 +88,9 @@ def test_shutdown_of_one_deployment_leaves_the_other_running(tmp_path: Path) -> 
                               env=a.env, cwd=tmp_path, capture_output=True, text=True, timeout=240)
         assert down.returncode == 0, down.stdout + down.stderr
         assert a.proc.wait(120) == 0, a.out.read_text()
-        wait_until(lambda: not [p for p in pids_a if alive(p[1], p[2])], 60, "every process of A to exit")
+        wait_until(lambda: not [p for p in pids_a if pid_alive(p[1], p[2])], 60, "every process of A to exit")
 
-        gone_b = [p for p in pids_b if not alive(p[1], p[2])]
+        gone_b = [p for p in pids_b if not pid_alive(p[1], p[2])]
         assert not gone_b, f"stopping A took down B's {gone_b}"
         assert b.state_file.is_file()
         assert "exited on its own" not in b.out.read_text(), b.out.read_text()
@@ -97,11 +98,11 @@ def test_shutdown_of_one_deployment_leaves_the_other_running(tmp_path: Path) -> 
         state, detail, _ = navigate(b.env["RBNX_ATLAS_LISTEN"], *KITCHEN_GOAL, timeout_s=120,
                                     token=json.loads(b.state_file.read_text()).get("token", ""))
         assert state == "SUCCEEDED", detail
-        assert all(alive(p[1], p[2]) for p in pids_b)
+        assert all(pid_alive(p[1], p[2]) for p in pids_b)
 
         b.proc.send_signal(signal.SIGINT)
         assert b.proc.wait(120) == 0, b.out.read_text()
-        wait_until(lambda: not [p for p in pids_b if alive(p[1], p[2])], 60, "every process of B to exit")
+        wait_until(lambda: not [p for p in pids_b if pid_alive(p[1], p[2])], 60, "every process of B to exit")
     finally:
         a.stop()
         b.stop()

@@ -14,11 +14,12 @@ from pathlib import Path
 
 import grpc
 import pytest
-from support.e2e import SIM_DEPLOY, alive, e2e_env, grpc_endpoint, rbnx_cmd, recorded_pids
+from support.e2e import SIM_DEPLOY, e2e_env, grpc_endpoint, rbnx_cmd, recorded_pids
 from support.procs import wait_until
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import pid_alive
 from robonix_api.proto_gen import navigation_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
 
@@ -123,7 +124,7 @@ def booted(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, deploy: Path, entrie
                 proc.kill()
                 proc.wait(10)
     assert proc.returncode == 0, out.read_text()[-3000:]
-    wait_until(lambda: not any(alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")
+    wait_until(lambda: not any(pid_alive(p, t) for _, p, t in every_pid), 30, "every process of every run to exit")
 
 
 @contextmanager

@@ -17,9 +17,10 @@ import time
 from pathlib import Path
 
 import pytest
-from support.e2e import alive, rbnx_cmd, wait_until
+from support.e2e import rbnx_cmd, wait_until
 
 from robonix_api.atlas_client import AtlasClient
+from robonix_api.procs import pid_alive
 from robonix_api.types import LifecycleState
 
 from .faultutil import navigate, sim_boot
@@ -68,7 +69,7 @@ def test_sigkill_of_each_provider_is_seen_at_once_restarted_and_the_next_goal_su
             new = _children(state_file)[name]
             assert new["pid"] != old["pid"], new
             assert new["restarts"] == 1, new
-            assert not alive(old["pid"], old["start_ticks"])
+            assert not pid_alive(old["pid"], old["start_ticks"])
             run.record_pids()
             assert f"{name} killed by signal 9; marked TERMINATED" in run.output()
             # the restarted process was told it is a restart
