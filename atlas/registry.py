@@ -27,20 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from atlas.catalogue import Catalogue
-from robonix_api.types import (
-    Capability,
-    CapabilityProvider,
-    Channel,
-    ContractDescriptor,
-    GrpcParams,
-    Kind,
-    LifecycleState,
-    McpParams,
-    Ros2Params,
-    Transport,
-    TransportParams,
-    params_to_dict,
-)
+from robonix_api import types as rt
 
 log = logging.getLogger(__name__)
 
@@ -91,19 +78,19 @@ def is_valid_ros2_name(name: str) -> bool:
     return all(_TOKEN.match(token) and "__" not in token and not token.endswith("_") for token in rest.split("/"))
 
 
-def _check_transport_params(transport: Transport | int, params: TransportParams | None) -> Transport:
+def _check_transport_params(transport: rt.Transport | int, params: rt.TransportParams | None) -> rt.Transport:
     """The declared transport, checked together with its params (INVALID_ARGUMENT naming the field)."""
     try:
-        transport = Transport(transport)
+        transport = rt.Transport(transport)
     except ValueError:
         raise _invalid(f"transport: unknown value {transport}") from None
-    if transport == Transport.UNSPECIFIED:
+    if transport == rt.Transport.UNSPECIFIED:
         raise _invalid("transport: must be TRANSPORT_GRPC, TRANSPORT_ROS2 or TRANSPORT_MCP")
     if params is None:
         raise _invalid(f"params: must be set (params.{transport.label} for transport {transport.name})")
     if params.transport != transport:
         raise _invalid(f"params: params.{params.transport.label} does not match transport {transport.name}")
-    if isinstance(params, McpParams) and params.input_schema_json:
+    if isinstance(params, rt.McpParams) and params.input_schema_json:
         try:
             schema = json.loads(params.input_schema_json)
         except ValueError as exc:
@@ -144,9 +131,9 @@ def rewrite_ros2_endpoint(proposed: str) -> str:
 @dataclass
 class _Cap:
     contract_id: str
-    transport: Transport
+    transport: rt.Transport
     endpoint: str
-    params: TransportParams
+    params: rt.TransportParams
     description: str
     namespace_mismatch: bool
 
@@ -154,25 +141,25 @@ class _Cap:
 @dataclass
 class _Provider:
     id: str
-    kind: Kind
+    kind: rt.Kind
     namespace: str
     capability_md_path: str
     capability_md: str
     registration_id: str
     last_heartbeat_ms: int
     hb_mono: float
-    pushed_state: LifecycleState | None = None
+    pushed_state: rt.LifecycleState | None = None
     state_detail: str = ""
-    caps: dict[tuple[str, Transport], _Cap] = field(default_factory=dict)
+    caps: dict[tuple[str, rt.Transport], _Cap] = field(default_factory=dict)
 
     @property
-    def state(self) -> LifecycleState:
+    def state(self) -> rt.LifecycleState:
         """robonix rule: never pushed -> INACTIVE once a non-driver capability exists, else REGISTERED."""
         if self.pushed_state is not None:
             return self.pushed_state
         if any(not cid.endswith("/driver") for cid, _ in self.caps):
-            return LifecycleState.INACTIVE
-        return LifecycleState.REGISTERED
+            return rt.LifecycleState.INACTIVE
+        return rt.LifecycleState.REGISTERED
 
 
 @dataclass
@@ -181,18 +168,18 @@ class _Channel:
     consumer_id: str
     provider_id: str
     contract_id: str
-    transport: Transport
+    transport: rt.Transport
     endpoint: str
-    params: TransportParams
+    params: rt.TransportParams
     opened_ms: int
     renewed_mono: float = 0.0
 
 
 _LEGAL_EDGES = {
-    (LifecycleState.REGISTERED, LifecycleState.INACTIVE),
-    (LifecycleState.INACTIVE, LifecycleState.ACTIVE),
-    (LifecycleState.ACTIVE, LifecycleState.INACTIVE),
-    (LifecycleState.ERROR, LifecycleState.INACTIVE),
+    (rt.LifecycleState.REGISTERED, rt.LifecycleState.INACTIVE),
+    (rt.LifecycleState.INACTIVE, rt.LifecycleState.ACTIVE),
+    (rt.LifecycleState.ACTIVE, rt.LifecycleState.INACTIVE),
+    (rt.LifecycleState.ERROR, rt.LifecycleState.INACTIVE),
 }
 
 
@@ -229,7 +216,7 @@ class Registry:
         self._by_consumer: dict[str, OrderedDict[str, None]] = {}
         self.channels_evicted = 0  # dropped by the caps or an expired lease (diagnostics, tests)
         self._by_contract: dict[str, set[str]] = {}
-        self._endpoints: dict[tuple[Transport, str], set[str]] = {}
+        self._endpoints: dict[tuple[rt.Transport, str], set[str]] = {}
 
     # ----------------------------------------------------------------- helpers (lock held)
 
@@ -327,14 +314,14 @@ class Registry:
         ns = namespace.strip("/")
         return not (contract_id == ns or contract_id.startswith(ns + "/"))
 
-    def _foreign_owners(self, transport: Transport, endpoint: str, me: str) -> list[str]:
+    def _foreign_owners(self, transport: rt.Transport, endpoint: str, me: str) -> list[str]:
         owners = self._endpoints.get((transport, endpoint), ())
-        return sorted(o for o in owners if o != me and self._providers[o].state != LifecycleState.TERMINATED)
+        return sorted(o for o in owners if o != me and self._providers[o].state != rt.LifecycleState.TERMINATED)
 
     # ----------------------------------------------------------------- providers
 
     def register(
-        self, kind: Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
+        self, kind: rt.Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
         *, may_replace_live: bool = True,
     ) -> str:
         """Register or take over ``id`` (same kind); returns the id (assigned when empty)."""
@@ -342,7 +329,7 @@ class Registry:
                                 may_replace_live=may_replace_live)[0]
 
     def register_ex(
-        self, kind: Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
+        self, kind: rt.Kind, id: str, namespace: str, capability_md_path: str = "", capability_md: str = "",
         *, may_replace_live: bool = True,
     ) -> tuple[str, str]:
         """:meth:`register`, returning ``(id, registration_id)``.
@@ -350,8 +337,8 @@ class Registry:
         Ownership: a live (not TERMINATED) registration is replaced only when ``may_replace_live`` (the
         caller holds the deployment token, or the atlas has none: robonix's takeover); otherwise
         ALREADY_EXISTS names the holder, so a stranger cannot redirect ``nav2``'s consumers."""
-        kind = Kind(kind)
-        if kind == Kind.UNSPECIFIED:
+        kind = rt.Kind(kind)
+        if kind == rt.Kind.UNSPECIFIED:
             raise _invalid("kind: must be primitive, service or skill")
         if not namespace:
             raise _invalid("namespace: must not be empty")
@@ -364,7 +351,7 @@ class Registry:
                         "ALREADY_EXISTS",
                         f"id: {pid!r} is already registered as a {old.kind.label}, not a {kind.label}",
                     )
-                if not may_replace_live and old.state != LifecycleState.TERMINATED:
+                if not may_replace_live and old.state != rt.LifecycleState.TERMINATED:
                     raise RegistryError(
                         "ALREADY_EXISTS",
                         f"id: {pid!r} is held by a live registration ({old.state.label}); it can be replaced "
@@ -414,23 +401,23 @@ class Registry:
             p.hb_mono = self._clock()
             self._renew_consumer(id, p.hb_mono)
 
-    def set_state(self, id: str, state: LifecycleState, detail: str = "") -> LifecycleState:
+    def set_state(self, id: str, state: rt.LifecycleState, detail: str = "") -> rt.LifecycleState:
         """Store the pushed state (an unusual edge is logged, not refused); returns the previous one."""
         try:
-            state = LifecycleState(state)
+            state = rt.LifecycleState(state)
         except ValueError:
             raise _invalid(f"state: unknown value {state}") from None
-        if state == LifecycleState.UNSPECIFIED:
+        if state == rt.LifecycleState.UNSPECIFIED:
             raise _invalid("state: must not be STATE_UNSPECIFIED")
         with self._lock:
             p = self._get(id)
             prev = p.state
-            if (prev != state and state not in (LifecycleState.ERROR, LifecycleState.TERMINATED)
+            if (prev != state and state not in (rt.LifecycleState.ERROR, rt.LifecycleState.TERMINATED)
                     and (prev, state) not in _LEGAL_EDGES):
                 log.warning("%s: unusual lifecycle edge %s -> %s (stored)", id, prev.name, state.name)
             p.pushed_state = state
             p.state_detail = detail
-            if state == LifecycleState.TERMINATED:
+            if state == rt.LifecycleState.TERMINATED:
                 self._drop_channels(id)
         return prev
 
@@ -440,9 +427,9 @@ class Registry:
         self,
         provider_id: str,
         contract_id: str,
-        transport: Transport | int,
+        transport: rt.Transport | int,
         endpoint: str,
-        params: TransportParams | None,
+        params: rt.TransportParams | None,
         description: str = "",
     ) -> str:
         """Declare one (contract, transport) of a provider; returns the endpoint actually stored."""
@@ -451,9 +438,9 @@ class Registry:
         if not contract_id:
             raise _invalid("contract_id: must not be empty")
         transport = _check_transport_params(transport, params)
-        if not endpoint and transport != Transport.ROS2:
+        if not endpoint and transport != rt.Transport.ROS2:
             raise _invalid(f"endpoint: must not be empty for transport {transport.name}")
-        if transport != Transport.ROS2 and self._endpoint_check is not None:
+        if transport != rt.Transport.ROS2 and self._endpoint_check is not None:
             problem = self._endpoint_check(endpoint)
             if problem:
                 raise _invalid(f"endpoint: {problem}")
@@ -486,7 +473,7 @@ class Registry:
             self._endpoints.setdefault((transport, ep), set()).add(p.id)
         return ep
 
-    def _resolve_endpoint(self, pid: str, contract_id: str, transport: Transport, endpoint: str) -> str:
+    def _resolve_endpoint(self, pid: str, contract_id: str, transport: rt.Transport, endpoint: str) -> str:
         if not endpoint:  # only ROS 2 gets here
             for _ in range(MINT_ATTEMPTS):
                 ep = mint_ros2_endpoint(contract_id)
@@ -496,7 +483,7 @@ class Registry:
         owners = self._foreign_owners(transport, endpoint, pid)
         if not owners:
             return endpoint
-        if transport != Transport.ROS2:
+        if transport != rt.Transport.ROS2:
             raise RegistryError(
                 "ALREADY_EXISTS",
                 f"endpoint: {endpoint!r} over {transport.name} is already declared by {owners[0]!r}",
@@ -510,8 +497,8 @@ class Registry:
 
     # ----------------------------------------------------------------- queries
 
-    def _view(self, p: _Provider, caps: list[_Cap]) -> CapabilityProvider:
-        return CapabilityProvider(
+    def _view(self, p: _Provider, caps: list[_Cap]) -> rt.CapabilityProvider:
+        return rt.CapabilityProvider(
             id=p.id,
             kind=p.kind,
             namespace=p.namespace,
@@ -520,7 +507,7 @@ class Registry:
             state=p.state,
             state_detail=p.state_detail,
             capabilities=[
-                Capability(
+                rt.Capability(
                     p.id, p.kind, c.contract_id, c.transport, c.params, c.description, c.namespace_mismatch
                 )
                 for c in caps
@@ -531,18 +518,18 @@ class Registry:
 
     def query(
         self,
-        kind: Kind | int = Kind.UNSPECIFIED,
+        kind: rt.Kind | int = rt.Kind.UNSPECIFIED,
         id: str = "",
         contract_id: str = "",
-        transport: Transport | int = Transport.UNSPECIFIED,
+        transport: rt.Transport | int = rt.Transport.UNSPECIFIED,
         namespace_prefix: str = "",
-    ) -> list[CapabilityProvider]:
+    ) -> list[rt.CapabilityProvider]:
         """robonix Query: empty/UNSPECIFIED (or unknown enum) = no filter; with contract_id, providers
         lacking it are dropped; capabilities are filtered by contract and transport, but a provider is
         kept when only the transport filter empties its list. Sorted by provider id."""
-        kind = Kind(kind) if kind in Kind._value2member_map_ else Kind.UNSPECIFIED
+        kind = rt.Kind(kind) if kind in rt.Kind._value2member_map_ else rt.Kind.UNSPECIFIED
         transport = (
-            Transport(transport) if transport in Transport._value2member_map_ else Transport.UNSPECIFIED
+            rt.Transport(transport) if transport in rt.Transport._value2member_map_ else rt.Transport.UNSPECIFIED
         )
         with self._lock:
             if id:
@@ -570,8 +557,8 @@ class Registry:
             return out
 
     def connect(
-        self, consumer_id: str, provider_id: str, contract_id: str, transport: Transport | int
-    ) -> Channel:
+        self, consumer_id: str, provider_id: str, contract_id: str, transport: rt.Transport | int
+    ) -> rt.Channel:
         """Open a channel to a declared (contract, transport) of a live provider."""
         for name, value in (
             ("consumer_id", consumer_id),
@@ -581,10 +568,10 @@ class Registry:
             if not value:
                 raise _invalid(f"{name}: must not be empty")
         try:
-            transport = Transport(transport)
+            transport = rt.Transport(transport)
         except ValueError:
             raise _invalid(f"transport: unknown value {transport}") from None
-        if transport == Transport.UNSPECIFIED:
+        if transport == rt.Transport.UNSPECIFIED:
             raise _invalid("transport: must not be TRANSPORT_UNSPECIFIED")
         with self._lock:
             p = self._get(provider_id, "provider_id")
@@ -595,7 +582,7 @@ class Registry:
                     f"contract_id: provider {provider_id!r} has no capability {contract_id!r} "
                     f"over {transport.name}",
                 )
-            if p.state == LifecycleState.TERMINATED:
+            if p.state == rt.LifecycleState.TERMINATED:
                 # robonix's atlas opens the channel all the same (its record keeps the endpoints until GC);
                 # consumers that want live providers filter on state, as find_capability does.
                 log.info("connect %s -> %s: provider is TERMINATED (%s)", consumer_id, provider_id,
@@ -616,7 +603,7 @@ class Registry:
             self._channels[ch.channel_id] = ch
             self._by_consumer.setdefault(consumer_id, OrderedDict())[ch.channel_id] = None
             self._renew_consumer(consumer_id, now)  # using the atlas renews the consumer's other channels
-        return Channel(ch.channel_id, ch.endpoint, ch.params, provider_id, contract_id, transport)
+        return rt.Channel(ch.channel_id, ch.endpoint, ch.params, provider_id, contract_id, transport)
 
     def disconnect(self, channel_id: str) -> bool:
         with self._lock:
@@ -630,12 +617,12 @@ class Registry:
 
     # ----------------------------------------------------------------- contracts
 
-    def query_contract(self, contract_id: str) -> ContractDescriptor | None:
+    def query_contract(self, contract_id: str) -> rt.ContractDescriptor | None:
         if not contract_id:
             raise _invalid("contract_id: must not be empty")
         return self.catalogue.get(contract_id)
 
-    def list_contracts(self, prefix: str = "") -> list[ContractDescriptor]:
+    def list_contracts(self, prefix: str = "") -> list[rt.ContractDescriptor]:
         return self.catalogue.list(prefix)
 
     # ----------------------------------------------------------------- eviction & inspection
@@ -657,12 +644,12 @@ class Registry:
         with self._lock:
             for p in list(self._providers.values()):
                 idle_ms = (now - p.hb_mono) * 1000.0
-                if p.state == LifecycleState.TERMINATED:
+                if p.state == rt.LifecycleState.TERMINATED:
                     if idle_ms > timeout + self.gc_after_terminated_ms:
                         self._remove(p)
                         removed.append(p.id)
                 elif idle_ms > timeout:
-                    p.pushed_state = LifecycleState.TERMINATED
+                    p.pushed_state = rt.LifecycleState.TERMINATED
                     p.state_detail = f"heartbeat lapsed > {timeout}ms"
                     self._drop_channels(p.id)
                     evicted.append(p.id)
@@ -685,7 +672,7 @@ class Registry:
                         "contract_id": c.contract_id,
                         "transport": c.transport.label,
                         "endpoint": c.endpoint,
-                        "params": params_to_dict(c.params),
+                        "params": rt.params_to_dict(c.params),
                         "description": c.description,
                         "namespace_mismatch": c.namespace_mismatch,
                     }
@@ -734,11 +721,8 @@ class Registry:
 
 
 __all__ = [
-    "GrpcParams",
-    "McpParams",
     "Registry",
     "RegistryError",
-    "Ros2Params",
     "is_valid_ros2_name",
     "mint_ros2_endpoint",
     "rewrite_ros2_endpoint",

@@ -1,7 +1,7 @@
 """Generate ``proto/robonix_contracts.proto`` from the contract catalogue and compile every proto.
 
 Run ``python -m robonix_api.codegen`` after changing a proto or a contract TOML. The generated
-Python lives in ``robonix_api/proto_gen`` and is committed; ``tests/test_codegen.py`` fails when it
+Python lives in ``robonix_api/proto_gen`` and is committed; ``tests/unit/robonix_api/test_codegen.py`` fails when it
 is stale. Imports between generated modules are made package-relative so that
 ``from robonix_api.proto_gen import atlas_pb2`` works without touching ``sys.path``.
 """

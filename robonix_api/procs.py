@@ -94,15 +94,16 @@ def wait_gone(alive: Callable[[], bool], timeout: float, poll_s: float = 0.05) -
 
 
 def stop_ladder(send: Callable[[int], None], alive: Callable[[], bool], term_timeout: float,
-                kill_timeout: float = KILL_WAIT_S) -> str:
-    """SIGTERM, wait up to ``term_timeout`` for ``alive()`` to turn false, then SIGKILL and wait again.
+                kill_timeout: float = KILL_WAIT_S, *, first: int = signal.SIGTERM) -> str:
+    """SIGTERM (or ``first``, e.g. SIGINT for a process whose clean shutdown is Ctrl-C), wait up to
+    ``term_timeout`` for ``alive()`` to turn false, then SIGKILL and wait again.
 
     ``send(sig)`` signals whatever is being stopped (a group, a PID, several groups); ``alive()`` says
     whether any of it is left. Returns how it ended: "exited" (nothing to stop), "terminated" or "killed".
     """
     if not alive():
         return "exited"
-    send(signal.SIGTERM)
+    send(first)
     if wait_gone(alive, term_timeout):
         return "terminated"
     send(signal.SIGKILL)
@@ -111,7 +112,7 @@ def stop_ladder(send: Callable[[int], None], alive: Callable[[], bool], term_tim
 
 
 def stop_process(proc: subprocess.Popen[Any], term_timeout: float = 30.0, *, group: bool = False,
-                 kill_timeout: float = KILL_WAIT_S) -> str:
+                 kill_timeout: float = KILL_WAIT_S, first: int = signal.SIGTERM) -> str:
     """Stop one child we started: its whole process group with ``group`` (it was started with
     ``start_new_session``), else just the process; reaps it. Same ladder and result as :func:`stop_ladder`."""
     if group:
@@ -127,7 +128,7 @@ def stop_process(proc: subprocess.Popen[Any], term_timeout: float = 30.0, *, gro
 
         def alive() -> bool:
             return proc.poll() is None
-    return stop_ladder(send, alive, term_timeout, kill_timeout)
+    return stop_ladder(send, alive, term_timeout, kill_timeout, first=first)
 
 
 class ProcessGroups:

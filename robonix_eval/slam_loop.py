@@ -20,7 +20,8 @@ from hal_panda_mobile.files import load_robot_description, load_scene
 from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
-# Named-waypoint routes for the navigation evaluations (tests/eval/test_nav_noise, bench/nav_suite).
+# Named-waypoint routes for the navigation evaluations (tests/integration/robonix_eval/test_nav_noise.py,
+# bench/nav_suite).
 ROUTES: dict[str, tuple[str, ...]] = {
     "apartment": ("bedroom", "living", "kitchen", "bedroom_2", "bathroom", "bedroom_2", "kitchen", "living"),
     "warehouse": ("aisle_1", "cross", "aisle_2", "dock", "top_aisle", "aisle_3", "aisle_1"),

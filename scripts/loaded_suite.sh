@@ -2,7 +2,7 @@
 # Run the test suite N times in a row (default 3) while BURNERS processes (default 2) keep the CPUs
 # busy, as on a shared CI machine; stops at the first failing run. Extra arguments go to pytest.
 #   scripts/loaded_suite.sh                 # 3 full runs beside 2 CPU burners
-#   RUNS=1 BURNERS=2 scripts/loaded_suite.sh tests/rbnx
+#   RUNS=1 BURNERS=2 scripts/loaded_suite.sh tests/integration/rbnx
 # The burners are this script's own children, stopped by PID on exit.
 set -euo pipefail
 runs="${RUNS:-3}"

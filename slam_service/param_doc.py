@@ -1,6 +1,6 @@
 """The ``slam`` parameter table of ``slam_service/CAPABILITY.md``, generated from :class:`SlamConfig`.
 
-``python -m slam_service.param_doc`` rewrites the table in place; ``tests/slam/test_param_doc.py`` fails
+``python -m slam_service.param_doc`` rewrites the table in place; ``tests/unit/slam_service/test_param_doc.py`` fails
 when the file is stale, so the declaration on the dataclass stays the only one a reader has to trust.
 """
 

@@ -1,9 +1,14 @@
 """Suite-wide isolation: loopback-only DDS on a domain id of this run's own, short atlas timeouts.
 
 Every process a test starts inherits this environment, so parallel runs on one machine never share
-DDS traffic, and nothing leaves 127.0.0.1. Also makes tests/support (shared process helpers) importable
-as ``support``: pytest's default (prepend) import mode already puts tests/ on sys.path, this keeps it so
-under other import modes.
+DDS traffic, and nothing leaves 127.0.0.1. Also makes tests/support (shared helpers) importable as
+``support`` and the two test trees as the packages ``unit`` and ``integration``: pytest's default
+(prepend) import mode already puts tests/ on sys.path, this keeps it so under other import modes.
+
+Layout: tests/unit/<package> never starts a process, opens a socket or creates a DDS participant;
+tests/integration/<package> (and integration/system for whole deployments) does. Every test under
+tests/integration is marked ``integration`` here, by path, so ``-m "not integration"`` and
+``-m integration`` select either half.
 """
 
 import os
@@ -13,6 +18,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
+INTEGRATION = REPO / "tests" / "integration"
 if str(REPO / "tests") not in sys.path:
     sys.path.insert(0, str(REPO / "tests"))
 
@@ -27,3 +33,10 @@ def _maps_root(tmp_path_factory: pytest.TempPathFactory) -> None:
     ``tmp_path`` map_dir is allowed and nothing is written to the user's own maps."""
     if not os.environ.get("ROBONIX_MAPS_ROOT"):
         os.environ["ROBONIX_MAPS_ROOT"] = str(tmp_path_factory.getbasetemp().resolve())
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark every test under tests/integration ``integration`` (by path, so no file can forget it)."""
+    for item in items:
+        if item.path.is_relative_to(INTEGRATION):
+            item.add_marker(pytest.mark.integration)

@@ -277,13 +277,7 @@ class SimBoot:
             ch.close()
         self._channels.clear()
         self.pids()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(60)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(30)
+        stop_process(self.proc, 60.0, kill_timeout=30.0, first=signal.SIGINT)   # Ctrl-C is its clean stop
         self._stop_own_atlas()
         for pid in self.seen:
             if alive(pid):

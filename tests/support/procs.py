@@ -10,7 +10,7 @@ import os
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -20,26 +20,16 @@ from robonix_api.atlas_client import AtlasClient
 from robonix_api.procs import stop_process
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 
+from .wait import wait_until  # also imported from here by the tests and bench/nav_latency_bench.py
+
 DRIVER = "robonix/lifecycle/driver"
 REPO = Path(__file__).resolve().parents[2]
 HAL = [sys.executable, "-m", "hal_panda_mobile"]
 SLAM = [sys.executable, "-m", "slam_service"]
 NAV = [sys.executable, "-m", "nav2_wrapper.atlas_bridge"]
-MAP_PROVIDER = [sys.executable, str(REPO / "tests" / "nav_provider" / "map_provider.py")]  # stand-in map service
+# the stand-in map service of the navigation tests
+MAP_PROVIDER = [sys.executable, str(REPO / "tests" / "integration" / "nav2_wrapper" / "map_provider.py")]
 INIT, ACTIVATE, DEACTIVATE, SHUTDOWN = 0, 1, 2, 3
-
-
-def wait_until(pred: Callable[[], Any], timeout_s: float = 30.0, what: str | Callable[[], str] = "condition",
-               interval: float = 0.05) -> Any:
-    """Poll ``pred`` until truthy and return its value; ``what`` (or its result) explains a timeout."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = pred()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what() if callable(what) else what}")
-        time.sleep(interval)
 
 
 def alive(pid: int) -> bool:

@@ -1,0 +1,65 @@
+"""`rbnx demo`'s goal choice and nav-detail parsing behave as the live view and summary rely on (its usage
+errors, which run the CLI, are in tests/integration/rbnx/test_demo_usage_errors.py)."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+
+from rbnx.demo.goals import Goal, choose_goals, parse_detail, path_length
+from rbnx.demo.report import GoalResult, goals_exit_code, print_table
+
+KITCHEN = {"island_east": [5.8, 3.0], "pantry": [8.3, 6.8], "dining": [2.5, 6.2], "fridge": [8.5, 2.0]}
+
+
+def test_goals_follow_file_order_skip_near_ones_and_cycle() -> None:
+    goals = choose_goals(KITCHEN, (5.5, 3.0), 6)
+    assert [g.name for g in goals] == ["pantry", "dining", "fridge", "island_east", "pantry", "dining"]
+
+
+def test_goals_seed_is_deterministic_and_never_repeats_in_place() -> None:
+    a = choose_goals(KITCHEN, (3.5, 1.6), 5, seed=3)
+    assert a == choose_goals(KITCHEN, (3.5, 1.6), 5, seed=3)
+    assert all(x != y for x, y in zip(a, a[1:], strict=False))
+
+
+def test_goals_none_when_every_waypoint_is_too_close() -> None:
+    assert choose_goals({"here": [0.0, 0.2]}, (0.0, 0.0), 3) == []
+    assert choose_goals({}, (0.0, 0.0), 3) == []
+
+
+def test_parse_detail_reads_the_nav_status_line() -> None:
+    p = parse_detail("2.88 m remaining, ETA 6 s, 1 recoveries, blocked")
+    assert (p.remaining_m, p.eta_s, p.recoveries) == (2.88, 6.0, 1)
+    assert parse_detail("reached goal (0.21 m from it, 0 recoveries)").remaining_m is None
+
+
+def test_path_length() -> None:
+    assert path_length([(0, 0), (3, 4), (3, 5)]) == pytest.approx(6.0)
+    assert path_length([(1, 1)]) == 0.0
+
+
+def _contact() -> dict:
+    return {"sim_time": 12.5, "robot_geom": "base", "other_geom": "wall_5", "x": 1.0, "y": 2.0}
+
+
+def test_a_goal_reached_with_a_contact_is_a_failure_in_summary_table_and_exit_code() -> None:
+    clean = GoalResult(1, Goal("a", 1.0, 1.0), state="SUCCEEDED")
+    hit = GoalResult(2, Goal("b", 3.0, 1.0), state="SUCCEEDED", collisions=[_contact()])
+    assert clean.succeeded
+    assert hit.reached
+    assert not hit.succeeded
+    assert hit.outcome == "CONTACT"
+    d = hit.as_dict()
+    assert (d["reached"], d["succeeded"], d["collision_count"]) == (True, False, 1)
+    assert d["failure"] == "contact with wall_5"
+    assert "failure" not in clean.as_dict()
+    assert goals_exit_code([clean], 1) == 0
+    assert goals_exit_code([clean, hit], 2) == 1
+    assert goals_exit_code([clean], 2) == 1               # a goal that never ran is not a success either
+    out = io.StringIO()
+    print_table([clean, hit], 2, out)
+    text = out.getvalue()
+    assert "CONTACT" in text
+    assert "1/2 goals succeeded (1 reached with a contact: failed)" in text
