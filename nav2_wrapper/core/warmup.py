@@ -25,7 +25,8 @@ from .planner import GlobalPlanner, PlannerConfig
 
 
 def compile_kernels() -> float:
-    """Plan once around an obstacle (A*, backtrack and the shortcut pass all run); returns seconds."""
+    """Plan once around an obstacle (A*, backtrack and the shortcut pass all run) and run the MPPI
+    controller's rollout kernel; returns seconds."""
     t0 = time.perf_counter()
     grid = np.zeros((60, 60), np.int8)
     grid[10:50, 28:32] = 100  # a wall between start and goal, so the path bends and gets shortcut
@@ -37,7 +38,17 @@ def compile_kernels() -> float:
         result = GlobalPlanner(PlannerConfig(heuristic_weight=weight)).plan(costmap, (0.4, 1.5), (2.6, 1.5))
         if not result.ok:
             raise RuntimeError(f"warm-up plan failed: {result.reason}")
+    _compile_mppi()
     return time.perf_counter() - t0
+
+
+def _compile_mppi() -> None:
+    """The MPPI controller's limit-and-rollout kernel, on the argument types a control step passes."""
+    from ._mppi_kernels import limit_and_rollout
+
+    u = np.zeros((2, 3, 3))
+    v3 = np.zeros(3)
+    limit_and_rollout(u, v3, v3, np.ones(3), np.ones(3), 0.05, np.empty_like(u))
 
 
 _done = threading.Event()
