@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
+
 _started: list[threading.Thread] = []
 _lock = threading.Lock()
 
@@ -18,6 +20,11 @@ def load_numeric_stack() -> None:
     import scipy.ndimage
     import scipy.sparse.linalg
     import scipy.spatial  # noqa: F401
+
+    from .occupancy import LogOddsGrid
+
+    # the occupancy grid's numba kernel: compiled (cold cache, ~1 s) or loaded from the cache here
+    LogOddsGrid(0.05).integrate(np.zeros(2), np.array([[1.0, 0.5], [-0.5, 1.0]]))
 
 
 def load_in_background() -> threading.Thread:

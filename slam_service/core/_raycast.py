@@ -1,0 +1,46 @@
+"""numba kernel for the occupancy grid: trace one scan's beams and add its hits and misses in one pass.
+
+The numpy version sampled every beam at half-cell steps into arrays of ~10^5 samples per scan and spent
+~2 ms per scan doing it (a third of an integrated scan's cost on the warehouse bench); the same sampling
+as a loop touches each sample once. The cell rules are unchanged: at most one miss per cell per scan, a
+cell hit by this scan gets no miss from it. Compiled with cache=True; ``numeric.load_numeric_stack``
+compiles (or loads) it ahead of the first scan.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def add_scan(logodds, r0, c0, ox, oy, pts, res, miss, hit, rmin, cmin, bh, bw):  # pragma: no cover - compiled
+    """Add ``hit`` at each endpoint's cell and ``miss`` at the cells its beam crosses (not the last
+    cell before the hit), into ``logodds`` (float32, global cell (r, c) at [r - r0, c - c0]). The box
+    [rmin, rmin + bh) x [cmin, cmin + bw) must contain the sensor and every endpoint."""
+    mark = np.zeros((bh, bw), np.uint8)  # 1 = miss, 2 = hit
+    n = pts.shape[0]
+    for p in range(n):
+        mark[int(math.floor(pts[p, 1] / res)) - rmin, int(math.floor(pts[p, 0] / res)) - cmin] = 2
+    step = 0.5 * res
+    for p in range(n):
+        vx, vy = pts[p, 0] - ox, pts[p, 1] - oy
+        length = math.hypot(vx, vy)
+        ns = int(math.floor(max(length - res, 0.0) / step))
+        inv = 1.0 / max(length, 1e-9)
+        ux, uy = vx * inv, vy * inv
+        for i in range(ns):
+            t = i * step
+            r = int(math.floor((oy + uy * t) / res)) - rmin
+            c = int(math.floor((ox + ux * t) / res)) - cmin
+            if 0 <= r < bh and 0 <= c < bw and mark[r, c] == 0:
+                mark[r, c] = 1
+    for r in range(bh):
+        for c in range(bw):
+            m = mark[r, c]
+            if m == 1:
+                logodds[r + rmin - r0, c + cmin - c0] += miss
+            elif m == 2:
+                logodds[r + rmin - r0, c + cmin - c0] += hit
