@@ -80,8 +80,11 @@ class LookupGrid:
         cut2 = (3.0 * s) ** 2
         data = np.zeros(mask.shape, dtype=np.float32)
         if sub_xy is None:
-            d2 = ndimage.distance_transform_edt(~mask) ** 2
-            data[:] = np.where(d2 <= cut2, np.exp(-0.5 * d2 / (s * s)), 0.0)
+            from ._field import gaussian_field  # numba kernel: stamps the cut field instead of a full EDT
+
+            r, c = np.nonzero(mask)
+            data = gaussian_field(r.astype(np.int64), c.astype(np.int64), mask.shape[0], mask.shape[1], float(s),
+                                  float(cut2))
         else:
             dist, idx = ndimage.distance_transform_edt(~mask, return_indices=True)
             br, bc = np.nonzero(dist <= 3.0 * s + 1.5)

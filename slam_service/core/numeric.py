@@ -23,8 +23,11 @@ def load_numeric_stack() -> None:
 
     from .occupancy import LogOddsGrid
 
-    # the occupancy grid's numba kernel: compiled (cold cache, ~1 s) or loaded from the cache here
+    # the numba kernels (occupancy rays, lookup field): compiled (cold cache, ~1 s) or loaded from the cache here
     LogOddsGrid(0.05).integrate(np.zeros(2), np.array([[1.0, 0.5], [-0.5, 1.0]]))
+    from .lookup import LookupGrid
+
+    LookupGrid.from_points(np.array([[1.0, 0.5]]), 0.05, 0.075, 0.5)  # and the lookup field's kernel
 
 
 def load_in_background() -> threading.Thread:
