@@ -37,3 +37,7 @@ def load_in_background() -> threading.Thread:
             _started.append(threading.Thread(target=load_numeric_stack, name="scipy-load", daemon=True))
             _started[0].start()
         return _started[0]
+
+
+if __name__ == "__main__":  # image build: ``python -m slam_service.core.numeric`` fills the numba cache
+    load_numeric_stack()
