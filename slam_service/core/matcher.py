@@ -50,6 +50,8 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     odometry seed): in a corridor, where the score is flat along the axis, the seed wins instead of an
     arbitrary cell. The reported ``response`` is the unpenalised score.
     """
+    from ._gather import shifted_sums  # numba kernel (loaded by numeric.load_numeric_stack)
+
     pts = np.asarray(points, dtype=np.float64)
     seed = np.asarray(seed, dtype=np.float64)
     n = len(pts)
@@ -77,7 +79,8 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     by, bx = np.meshgrid(starts, starts, indexing="ij")
     block_off = (by * wd + bx).ravel()  # (B,)
     upper = lookup.pooled(f).ravel()
-    bounds = upper[flat[:, :, None] + block_off[None, None, :]].sum(axis=1) / n  # (T, B)
+    heads = np.arange(len(th))
+    bounds = shifted_sums(upper, flat, heads, np.tile(block_off, (len(th), 1))) / n  # (T, B)
     tw = max(nt, 1)
 
     def prior(t_idx: NDArray | int, oy: NDArray, ox: NDArray) -> NDArray:
@@ -85,7 +88,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
 
     near_y = np.clip(0, by.ravel(), np.minimum(by.ravel() + f - 1, w))
     near_x = np.clip(0, bx.ravel(), np.minimum(bx.ravel() + f - 1, w))
-    bounds *= prior(np.arange(len(th))[:, None], near_y[None, :], near_x[None, :])
+    bounds *= prior(heads[:, None], near_y[None, :], near_x[None, :])
 
     fine = lookup.data.ravel()
     # fine offsets of every block, padded to f x f (cells past the window repeat the block's first cell)
@@ -105,7 +108,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
         if len(ks) == 0:
             break
         t, b = np.divmod(ks, len(block_off))
-        raw = fine[flat[t][:, :, None] + off_all[b][:, None, :]].sum(axis=1) / n  # (K, f*f)
+        raw = shifted_sums(fine, flat, t, off_all[b]) / n  # (K, f*f)
         sc = raw * prior(t[:, None], gy_all[b], gx_all[b])
         refined += len(ks)
         kb, j = np.unravel_index(int(np.argmax(sc)), sc.shape)
@@ -120,7 +123,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     nx = np.clip(dx_best + dd, -w, w)
     gy, gx = np.meshgrid(ny, nx, indexing="ij")
     off = (gy * wd + gx).ravel()
-    sc = fine[flat[tt][:, :, None] + off[None, None, :]].sum(axis=1) / n  # (Tn, 25)
+    sc = shifted_sums(fine, flat, tt, np.tile(off, (len(tt), 1))) / n  # (Tn, 25)
     wts = np.exp(-(score - sc) / max(0.05 * score, 1e-6))
     wts /= wts.sum()
     xs = np.broadcast_to(gx.ravel() * res, sc.shape)

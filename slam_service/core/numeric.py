@@ -23,11 +23,16 @@ def load_numeric_stack() -> None:
 
     from .occupancy import LogOddsGrid
 
-    # the numba kernels (occupancy rays, lookup field): compiled (cold cache, ~1 s) or loaded from the cache here
+    # the numba kernels (occupancy rays, lookup field, matcher sums): compiled (cold cache, ~1 s) or loaded
     LogOddsGrid(0.05).integrate(np.zeros(2), np.array([[1.0, 0.5], [-0.5, 1.0]]))
     from .lookup import LookupGrid
+    from .matcher import match_scan
 
-    LookupGrid.from_points(np.array([[1.0, 0.5]]), 0.05, 0.075, 0.5)  # and the lookup field's kernel
+    # the lookup field's kernel, then the matcher's
+    pts = np.array([[1.0, 0.5], [0.5, 1.0], [-1.0, 0.2], [0.3, -1.0], [-0.4, -0.6]])
+    lookup = LookupGrid.from_points(pts, 0.05, 0.075, 0.8)
+    match_scan(lookup, pts, np.zeros(3), window_xy=0.1, window_theta=0.02, angular_step=0.01, coarse_factor=2,
+               refine=False)
 
 
 def load_in_background() -> threading.Thread:
