@@ -22,9 +22,20 @@ def add_scan(logodds, r0, c0, ox, oy, pts, res, miss, hit, rmin, cmin, bh, bw): 
     [rmin, rmin + bh) x [cmin, cmin + bw) must contain the sensor and every endpoint."""
     mark = np.zeros((bh, bw), np.uint8)  # 1 = miss, 2 = hit
     n = pts.shape[0]
-    for p in range(n):
-        mark[int(math.floor(pts[p, 1] / res)) - rmin, int(math.floor(pts[p, 0] / res)) - cmin] = 2
     step = 0.5 * res
+    total = n
+    for p in range(n):
+        length = math.hypot(pts[p, 0] - ox, pts[p, 1] - oy)
+        total += int(math.floor(max(length - res, 0.0) / step))
+    touched = np.empty((total, 2), np.int64)  # cells marked, so the update does not scan the whole box
+    k = 0
+    for p in range(n):
+        r = int(math.floor(pts[p, 1] / res)) - rmin
+        c = int(math.floor(pts[p, 0] / res)) - cmin
+        if mark[r, c] == 0:
+            mark[r, c] = 2
+            touched[k, 0], touched[k, 1] = r, c
+            k += 1
     for p in range(n):
         vx, vy = pts[p, 0] - ox, pts[p, 1] - oy
         length = math.hypot(vx, vy)
@@ -37,10 +48,8 @@ def add_scan(logodds, r0, c0, ox, oy, pts, res, miss, hit, rmin, cmin, bh, bw): 
             c = int(math.floor((ox + ux * t) / res)) - cmin
             if 0 <= r < bh and 0 <= c < bw and mark[r, c] == 0:
                 mark[r, c] = 1
-    for r in range(bh):
-        for c in range(bw):
-            m = mark[r, c]
-            if m == 1:
-                logodds[r + rmin - r0, c + cmin - c0] += miss
-            elif m == 2:
-                logodds[r + rmin - r0, c + cmin - c0] += hit
+                touched[k, 0], touched[k, 1] = r, c
+                k += 1
+    for i in range(k):
+        r, c = touched[i, 0], touched[i, 1]
+        logodds[r + rmin - r0, c + cmin - c0] += miss if mark[r, c] == 1 else hit
