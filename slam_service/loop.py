@@ -25,7 +25,7 @@ from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
 from robonix_api.upstream import Binding
 from robonix_common.geometry import compose
 from slam_service.config import Frames
-from slam_service.core import Scan, SlamEngine
+from slam_service.core import Scan, SlamEngine, kernels
 
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
@@ -268,6 +268,8 @@ class SlamLoop:
         self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
         self._map_clock, self._map_wall = now, wall
         self.counters["maps_published"] += 1
+        if self.counters["maps_published"] == 1:  # numba after the first map: nav2 waits for it during boot
+            kernels.load_in_background()
         if self._on_map is not None:
             self._on_map(grid)
 

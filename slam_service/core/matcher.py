@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from . import kernels
 from .lookup import LookupGrid
 
 COV_INFLATION = 10.0  # scan errors are correlated: n points are worth far fewer independent ones
@@ -35,6 +36,16 @@ class MatchResult:
     refined_blocks: int = 0
 
 
+def shifted_sums(field: NDArray, flat: NDArray, rows: NDArray, offsets: NDArray) -> NDArray[np.float32]:
+    """out[k, j] = sum over beams of field[flat[rows[k]] + offsets[k, j]]: the numba kernel once loaded,
+    else the numpy gather + sum it reproduces bit for bit."""
+    if kernels.ready():
+        from ._gather import shifted_sums as kernel
+
+        return kernel(field, flat, rows, offsets)
+    return field[flat[rows][:, :, None] + offsets[:, None, :]].sum(axis=1)
+
+
 def required_margin(window_xy: float, coarse_factor: int, sigma: float, resolution: float) -> float:
     """Margin (m) a lookup grid needs around its obstacles so clipped indices read zero."""
     w = math.ceil(window_xy / resolution)
@@ -50,8 +61,6 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     odometry seed): in a corridor, where the score is flat along the axis, the seed wins instead of an
     arbitrary cell. The reported ``response`` is the unpenalised score.
     """
-    from ._gather import shifted_sums  # numba kernel (loaded by numeric.load_numeric_stack)
-
     pts = np.asarray(points, dtype=np.float64)
     seed = np.asarray(seed, dtype=np.float64)
     n = len(pts)

@@ -1,6 +1,7 @@
 """Log-odds occupancy grid that grows in chunks as the robot explores.
 
-Rays are traced by sampling at half-cell steps (a numba loop, ``_raycast``); each cell gets
+Rays are traced by sampling at half-cell steps (a numba loop, ``_raycast``, or its numpy twin until
+numba is loaded); each cell gets
 at most one "miss" per scan and hit cells never get a miss from the same scan, so a wall grazed by
 neighbouring beams is not erased by them.
 
@@ -18,6 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robonix_common.grid import FREE, OCCUPIED, UNKNOWN, GridMap
+
+from . import kernels
 
 
 class LogOddsGrid:
@@ -69,8 +72,6 @@ class LogOddsGrid:
         o = np.asarray(origin, dtype=np.float64)
         if len(pts) == 0:
             return
-        from ._raycast import add_scan  # numba loads with the first scan (or numeric.load_numeric_stack)
-
         res = self.resolution
         hc = np.floor(pts[:, 0] / res).astype(np.int64)
         hr = np.floor(pts[:, 1] / res).astype(np.int64)
@@ -80,8 +81,36 @@ class LogOddsGrid:
         rmin = min(int(hr.min()), orow)
         rmax = max(int(hr.max()), orow)
         self._ensure(cmin, rmin, cmax, rmax)
-        add_scan(self.logodds, self.r0, self.c0, float(o[0]), float(o[1]), pts, res, np.float32(self.miss * weight),
-                 np.float32(self.hit * weight), rmin, cmin, rmax - rmin + 1, cmax - cmin + 1)
+        miss, hit = np.float32(self.miss * weight), np.float32(self.hit * weight)
+        if kernels.ready():
+            from ._raycast import add_scan
+
+            add_scan(self.logodds, self.r0, self.c0, float(o[0]), float(o[1]), pts, res, miss, hit, rmin, cmin,
+                     rmax - rmin + 1, cmax - cmin + 1)
+            return
+        # numpy twin of the kernel (same cells, same float32 sums) until numba is loaded
+        vec = pts - o
+        length = np.hypot(vec[:, 0], vec[:, 1])
+        step = 0.5 * res
+        ns = np.maximum(np.floor(np.maximum(length - res, 0.0) / step).astype(np.int64), 0)  # stop before hit
+        total = int(ns.sum())
+        beam = np.repeat(np.arange(len(pts)), ns)
+        first = np.cumsum(ns) - ns
+        t = (np.arange(total) - np.repeat(first, ns)) * step
+        unit = vec / np.maximum(length, 1e-9)[:, None]
+        fc = np.floor((o[0] + unit[beam, 0] * t) / res).astype(np.int64)
+        fr = np.floor((o[1] + unit[beam, 1] * t) / res).astype(np.int64)
+        bw, bh = cmax - cmin + 1, rmax - rmin + 1
+        free = np.zeros(bw * bh, dtype=bool)
+        free[(fr - rmin) * bw + (fc - cmin)] = True
+        hits = np.zeros(bw * bh, dtype=bool)
+        hits[(hr - rmin) * bw + (hc - cmin)] = True
+        free &= ~hits
+        sub = self.logodds[rmin - self.r0:rmax - self.r0 + 1, cmin - self.c0:cmax - self.c0 + 1]
+        upd = np.zeros(bw * bh, dtype=np.float32)
+        upd[free] = miss
+        upd[hits] = hit
+        sub += upd.reshape(bh, bw)
 
     def to_gridmap(self, frame_id: str = "map") -> GridMap:
         """Trinary export: -1 unknown, 0 free, 100 occupied (thresholds on log-odds)."""
