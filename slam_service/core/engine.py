@@ -41,7 +41,7 @@ class SlamEngine:
         self._mode: Mode = mode
         self.last_optimize: OptimizeResult | None = None
         self.optimize_times: list[float] = []  # seconds per loop-closure optimisation (graph only)
-        self.rerender_times: list[float] = []  # seconds per map re-render after an optimisation
+        self.rerender_times: list[float] = []  # seconds per re-render batch (one call's node budget, or a flush)
         self._fixed_map: GridMap | None = None
         self._fixed_lookup: LookupGrid | None = None
         self.reset()
@@ -535,7 +535,8 @@ class SlamEngine:
 
 
 def _render_shift(old: NDArray, new: NDArray, max_range: float) -> NDArray:
-    """How far each node's drawn scan is off: translation plus heading change times ``max_range`` (m)."""
+    """How far each node's drawn scan is off (m): the larger of its translation and its heading change
+    times ``max_range`` (the shift of its farthest endpoint from the turn alone)."""
     dth = np.abs(np.remainder(new[:, 2] - old[:, 2] + math.pi, 2 * math.pi) - math.pi)
     return np.maximum(np.hypot(*(new[:, :2] - old[:, :2]).T), dth * max_range)
 
