@@ -75,6 +75,7 @@ class MapHandlers:
             return map_pb2.SaveMap_Response(ok=False, map_id=map_id, detail=NOT_INIT)
         with s.work.lock:  # consistent grid + session; scans wait meanwhile
             engine: SlamEngine = s.work.engine
+            engine.flush()  # a saved map shows every node at its optimised pose (the live map may lag a little)
             grid = engine.map()
             session = engine.session() if engine.graph.n_nodes else None
         writer = None

@@ -25,7 +25,7 @@ from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
 from robonix_api.upstream import Binding
 from robonix_common.geometry import compose
 from slam_service.config import Frames
-from slam_service.core import Scan, SlamEngine
+from slam_service.core import Scan, SlamEngine, kernels
 
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
@@ -119,6 +119,10 @@ class SlamLoop:
         self._map_dirty = self._has_map()
         self._map_clock, self._map_wall = -math.inf, -math.inf
         self.counters: dict[str, int] = collections.Counter()
+        # always in the status, also when 0: "no scan was dropped" is the claim the status must show
+        self.counters["scans_dropped_behind"] = 0
+        self.counters["process_over_100ms"] = 0
+        self.process_ms_max = 0.0  # slowest SlamEngine.process call so far (wall ms)
         self._subs = [
             node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan, bindings["scan"].qos),
             node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom, bindings["odom"].qos),
@@ -212,13 +216,21 @@ class SlamLoop:
                 m2o = self._resume_m2o if self._resume_m2o is not None else self.engine.map_to_odom()
                 self.engine.set_initial_pose(compose(m2o, odom))
                 self._resumed, self._resume_m2o = False, None
+            t0 = time.perf_counter()
             upd = self.engine.process(scan, odom, t)
+            self._note_process_time(1e3 * (time.perf_counter() - t0))
             self._m2o = upd.map_to_odom
             self._last_stamp = max(self._last_stamp, t)
             if upd.map_changed:
                 self._map_dirty = True
         self._send_tf(t)
         return None
+
+    def _note_process_time(self, ms: float) -> None:
+        """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
+        self.process_ms_max = max(self.process_ms_max, ms)
+        if ms > 100.0:
+            self.counters["process_over_100ms"] += 1
 
     # ---------------------------------------------------------------- outputs
     def _send_tf(self, stamp: float) -> None:
@@ -256,6 +268,8 @@ class SlamLoop:
         self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
         self._map_clock, self._map_wall = now, wall
         self.counters["maps_published"] += 1
+        if self.counters["maps_published"] == 1:  # numba after the first map: nav2 waits for it during boot
+            kernels.load_in_background()
         if self._on_map is not None:
             self._on_map(grid)
 
@@ -342,7 +356,8 @@ class SlamLoop:
         with self.lock:
             engine = self.engine.stats.to_dict()
             mode = self.engine.mode
-        return {"mode": mode, "integrating": self.integrating, **dict(self.counters), "engine": engine}
+        return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
+                "process_ms_max": round(self.process_ms_max, 1), "engine": engine}
 
     def close(self, reason: str = "") -> None:
         self._stop.set()

@@ -41,7 +41,7 @@ class SlamEngine:
         self._mode: Mode = mode
         self.last_optimize: OptimizeResult | None = None
         self.optimize_times: list[float] = []  # seconds per loop-closure optimisation (graph only)
-        self.rerender_times: list[float] = []  # seconds per map re-render after an optimisation
+        self.rerender_times: list[float] = []  # seconds per re-render batch (one call's node budget, or a flush)
         self._fixed_map: GridMap | None = None
         self._fixed_lookup: LookupGrid | None = None
         self.reset()
@@ -57,6 +57,7 @@ class SlamEngine:
         self._points: list[NDArray[np.float32]] = []
         self._origins: list[NDArray[np.float64]] = []
         self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
+        self._pending: list[int] = []  # nodes moved by an optimisation, awaiting re-render (next first)
         self.grid = LogOddsGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
                                   hi=c.log_odds_max, occupied_threshold=c.occupied_threshold,
                                   free_threshold=c.free_threshold, chunk=c.grid_chunk)
@@ -85,6 +86,7 @@ class SlamEngine:
         if mode == "localization" and self._fixed_lookup is None:
             if self.graph.n_nodes == 0:
                 raise ValueError("localization needs a map: load one or map first")
+            self.flush()
             self._set_fixed_map(self.map())
         self._mode = mode
         self._last_match_pose = None
@@ -268,7 +270,7 @@ class SlamEngine:
         prev = self._resume_from if self._resume_from is not None else n - 1
         if n and self._resume_from is None and not self._moved(self.graph.poses[-1], predicted):
             self.stats.scans_gated += 1
-            return self._update(False, False)
+            return self._update(False, self._render_pending() > 0)
         response = float("nan")
         if n == 0:
             pose, cov, kind = predicted, None, EDGE_ODOM
@@ -306,6 +308,8 @@ class SlamEngine:
         loop = False
         if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
             loop = self._try_loop_closure(k)
+        if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
+            self._render_pending()
         self.stats.scans_integrated += 1
         return self._update(True, True, response=response, loop=loop)
 
@@ -461,17 +465,21 @@ class SlamEngine:
         k = self.graph.n_nodes - 1
         self._pose = self.graph.poses[k].copy()
         self._map_to_odom = compose(self._pose, inverse(self._odom[k]))
-        t1 = time.perf_counter()
-        if self._rerender(moved_only=True):
-            self.rerender_times.append(time.perf_counter() - t1)
+        self._schedule_rerender()
         self._running = None
 
     def optimize(self) -> OptimizeResult | None:
-        """Run a full optimisation now (e.g. before saving); returns None without a graph."""
+        """Run a full optimisation now (e.g. before saving) and bring the map up to date; None without a graph."""
         if self.graph.n_edges == 0:
             return None
         self._optimize()
+        self.flush()
         return self.last_optimize
+
+    def flush(self) -> int:
+        """Re-render every node still waiting after an optimisation, so ``map()`` matches ``trajectory()``
+        (after the last scan, before saving or scoring a map). Returns how many nodes were drawn."""
+        return self._render_pending(len(self._pending))
 
     def _render_node(self, k: int, pose: NDArray) -> None:
         org, pts = self._origins[k], self._points[k]
@@ -484,25 +492,53 @@ class SlamEngine:
         self.grid.integrate(transform_points(pose, org[None])[0], transform_points(pose, pts))
         self._map_cache = None
 
-    def _rerender(self, moved_only: bool = False) -> int:
-        """Re-render nodes from their (optimised) poses: all of them, or only those that moved more than
-        ``re_render_threshold`` (their old contribution is subtracted first). Returns how many."""
-        if not moved_only:
-            self.grid.clear()
-            self._rendered = []
-            for k, pose in enumerate(self.graph.poses):
-                self._render_node(k, pose)
-            return self.graph.n_nodes
-        if not self._rendered:
+    def _rerender(self) -> int:
+        """Render every node from scratch at its current pose (after a session load). Returns how many."""
+        self.grid.clear()
+        self._rendered = []
+        self._pending = []
+        for k, pose in enumerate(self.graph.poses):
+            self._render_node(k, pose)
+        self.stats.map_nodes_pending = 0
+        return self.graph.n_nodes
+
+    def _schedule_rerender(self) -> None:
+        """After an optimisation: queue the nodes whose drawn pose is off by more than ``re_render_threshold``
+        (at max range), the largest shift first, so the map converges where it is most wrong.
+
+        Nothing is drawn here: re-drawing hundreds of scans in the call that closed the loop stalled the
+        scan path for up to seconds. ``_render_pending`` draws a fixed number per ``process`` call instead;
+        a node count (not a time budget) keeps the result a function of the input sequence alone.
+        """
+        self._pending = []
+        if self._rendered:
+            mv = _render_shift(np.asarray(self._rendered), self.graph.poses[:len(self._rendered)],
+                               self.config.max_range)
+            moved = np.flatnonzero(mv > self.config.re_render_threshold)
+            self._pending = [int(k) for k in moved[np.argsort(-mv[moved], kind="stable")]][::-1]
+        self.stats.map_nodes_pending = len(self._pending)
+
+    def _render_pending(self, budget: int | None = None) -> int:
+        """Re-draw up to ``budget`` (default ``rerender_nodes_per_scan``) queued nodes at their current pose.
+        Their old contribution is subtracted first (the grid stores exact sums). Returns how many."""
+        if not self._pending:
             return 0
-        old = np.asarray(self._rendered)
-        new = self.graph.poses[:len(old)]
-        dth = np.abs(np.remainder(new[:, 2] - old[:, 2] + math.pi, 2 * math.pi) - math.pi)
-        thr = self.config.re_render_threshold
-        moved = np.flatnonzero((np.hypot(*(new[:, :2] - old[:, :2]).T) > thr) | (dth * self.config.max_range > thr))
-        for k in moved:
-            self._render_node(int(k), self.graph.poses[k])
-        return len(moved)
+        n = min(len(self._pending), self.config.rerender_nodes_per_scan if budget is None else budget)
+        t0 = time.perf_counter()
+        for _ in range(n):
+            k = self._pending.pop()  # the list is stored largest shift last
+            self._render_node(k, self.graph.poses[k])
+        self.rerender_times.append(time.perf_counter() - t0)
+        self.stats.map_nodes_rerendered += n
+        self.stats.map_nodes_pending = len(self._pending)
+        return n
+
+
+def _render_shift(old: NDArray, new: NDArray, max_range: float) -> NDArray:
+    """How far each node's drawn scan is off (m): the larger of its translation and its heading change
+    times ``max_range`` (the shift of its farthest endpoint from the turn alone)."""
+    dth = np.abs(np.remainder(new[:, 2] - old[:, 2] + math.pi, 2 * math.pi) - math.pi)
+    return np.maximum(np.hypot(*(new[:, :2] - old[:, :2]).T), dth * max_range)
 
 
 def _info_in_frame(cov_map: NDArray, theta: float) -> NDArray:

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from . import kernels
+
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree
 
@@ -79,7 +81,13 @@ class LookupGrid:
         s = sigma / resolution
         cut2 = (3.0 * s) ** 2
         data = np.zeros(mask.shape, dtype=np.float32)
-        if sub_xy is None:
+        if sub_xy is None and kernels.ready():
+            from ._field import gaussian_field  # stamps the cut field instead of a full EDT (same values)
+
+            r, c = np.nonzero(mask)
+            data = gaussian_field(r.astype(np.int64), c.astype(np.int64), mask.shape[0], mask.shape[1], float(s),
+                                  float(cut2))
+        elif sub_xy is None:
             d2 = ndimage.distance_transform_edt(~mask) ** 2
             data[:] = np.where(d2 <= cut2, np.exp(-0.5 * d2 / (s * s)), 0.0)
         else:

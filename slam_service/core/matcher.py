@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from . import kernels
 from .lookup import LookupGrid
 
 COV_INFLATION = 10.0  # scan errors are correlated: n points are worth far fewer independent ones
@@ -33,6 +34,16 @@ class MatchResult:
     covariance: NDArray[np.float64]  # (3, 3)
     n_points: int
     refined_blocks: int = 0
+
+
+def shifted_sums(field: NDArray, flat: NDArray, rows: NDArray, offsets: NDArray) -> NDArray[np.float32]:
+    """out[k, j] = sum over beams of field[flat[rows[k]] + offsets[k, j]]: the numba kernel once loaded,
+    else the numpy gather + sum it reproduces bit for bit."""
+    if kernels.ready():
+        from ._gather import shifted_sums as kernel
+
+        return kernel(field, flat, rows, offsets)
+    return field[flat[rows][:, :, None] + offsets[:, None, :]].sum(axis=1)
 
 
 def required_margin(window_xy: float, coarse_factor: int, sigma: float, resolution: float) -> float:
@@ -77,7 +88,8 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     by, bx = np.meshgrid(starts, starts, indexing="ij")
     block_off = (by * wd + bx).ravel()  # (B,)
     upper = lookup.pooled(f).ravel()
-    bounds = upper[flat[:, :, None] + block_off[None, None, :]].sum(axis=1) / n  # (T, B)
+    heads = np.arange(len(th))
+    bounds = shifted_sums(upper, flat, heads, np.tile(block_off, (len(th), 1))) / n  # (T, B)
     tw = max(nt, 1)
 
     def prior(t_idx: NDArray | int, oy: NDArray, ox: NDArray) -> NDArray:
@@ -85,7 +97,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
 
     near_y = np.clip(0, by.ravel(), np.minimum(by.ravel() + f - 1, w))
     near_x = np.clip(0, bx.ravel(), np.minimum(bx.ravel() + f - 1, w))
-    bounds *= prior(np.arange(len(th))[:, None], near_y[None, :], near_x[None, :])
+    bounds *= prior(heads[:, None], near_y[None, :], near_x[None, :])
 
     fine = lookup.data.ravel()
     # fine offsets of every block, padded to f x f (cells past the window repeat the block's first cell)
@@ -105,7 +117,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
         if len(ks) == 0:
             break
         t, b = np.divmod(ks, len(block_off))
-        raw = fine[flat[t][:, :, None] + off_all[b][:, None, :]].sum(axis=1) / n  # (K, f*f)
+        raw = shifted_sums(fine, flat, t, off_all[b]) / n  # (K, f*f)
         sc = raw * prior(t[:, None], gy_all[b], gx_all[b])
         refined += len(ks)
         kb, j = np.unravel_index(int(np.argmax(sc)), sc.shape)
@@ -120,7 +132,7 @@ def match_scan(lookup: LookupGrid, points: NDArray, seed: NDArray, *, window_xy:
     nx = np.clip(dx_best + dd, -w, w)
     gy, gx = np.meshgrid(ny, nx, indexing="ij")
     off = (gy * wd + gx).ravel()
-    sc = fine[flat[tt][:, :, None] + off[None, None, :]].sum(axis=1) / n  # (Tn, 25)
+    sc = shifted_sums(fine, flat, tt, np.tile(off, (len(tt), 1))) / n  # (Tn, 25)
     wts = np.exp(-(score - sc) / max(0.05 * score, 1e-6))
     wts /= wts.sum()
     xs = np.broadcast_to(gx.ravel() * res, sc.shape)

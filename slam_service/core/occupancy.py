@@ -1,6 +1,7 @@
 """Log-odds occupancy grid that grows in chunks as the robot explores.
 
-Rays are traced by sampling at half-cell steps (a vectorised stand-in for Bresenham); each cell gets
+Rays are traced by sampling at half-cell steps (a numba loop, ``_raycast``, or its numpy twin until
+numba is loaded); each cell gets
 at most one "miss" per scan and hit cells never get a miss from the same scan, so a wall grazed by
 neighbouring beams is not erased by them.
 
@@ -18,6 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robonix_common.grid import FREE, OCCUPIED, UNKNOWN, GridMap
+
+from . import kernels
 
 
 class LogOddsGrid:
@@ -65,11 +68,27 @@ class LogOddsGrid:
 
         ``weight=-1`` removes a scan integrated earlier with the same arguments.
         """
-        pts = np.asarray(endpoints, dtype=np.float64).reshape(-1, 2)
+        pts = np.ascontiguousarray(np.asarray(endpoints, dtype=np.float64).reshape(-1, 2))
         o = np.asarray(origin, dtype=np.float64)
         if len(pts) == 0:
             return
         res = self.resolution
+        hc = np.floor(pts[:, 0] / res).astype(np.int64)
+        hr = np.floor(pts[:, 1] / res).astype(np.int64)
+        oc, orow = int(math.floor(o[0] / res)), int(math.floor(o[1] / res))
+        cmin = min(int(hc.min()), oc)
+        cmax = max(int(hc.max()), oc)
+        rmin = min(int(hr.min()), orow)
+        rmax = max(int(hr.max()), orow)
+        self._ensure(cmin, rmin, cmax, rmax)
+        miss, hit = np.float32(self.miss * weight), np.float32(self.hit * weight)
+        if kernels.ready():
+            from ._raycast import add_scan
+
+            add_scan(self.logodds, self.r0, self.c0, float(o[0]), float(o[1]), pts, res, miss, hit, rmin, cmin,
+                     rmax - rmin + 1, cmax - cmin + 1)
+            return
+        # numpy twin of the kernel (same cells, same float32 sums) until numba is loaded
         vec = pts - o
         length = np.hypot(vec[:, 0], vec[:, 1])
         step = 0.5 * res
@@ -79,28 +98,18 @@ class LogOddsGrid:
         first = np.cumsum(ns) - ns
         t = (np.arange(total) - np.repeat(first, ns)) * step
         unit = vec / np.maximum(length, 1e-9)[:, None]
-        sx = o[0] + unit[beam, 0] * t
-        sy = o[1] + unit[beam, 1] * t
-        fc = np.floor(sx / res).astype(np.int64)
-        fr = np.floor(sy / res).astype(np.int64)
-        hc = np.floor(pts[:, 0] / res).astype(np.int64)
-        hr = np.floor(pts[:, 1] / res).astype(np.int64)
-        oc, orow = int(math.floor(o[0] / res)), int(math.floor(o[1] / res))
-        cmin = min(int(hc.min()), oc)
-        cmax = max(int(hc.max()), oc)
-        rmin = min(int(hr.min()), orow)
-        rmax = max(int(hr.max()), orow)
-        self._ensure(cmin, rmin, cmax, rmax)
+        fc = np.floor((o[0] + unit[beam, 0] * t) / res).astype(np.int64)
+        fr = np.floor((o[1] + unit[beam, 1] * t) / res).astype(np.int64)
         bw, bh = cmax - cmin + 1, rmax - rmin + 1
         free = np.zeros(bw * bh, dtype=bool)
         free[(fr - rmin) * bw + (fc - cmin)] = True
-        hit = np.zeros(bw * bh, dtype=bool)
-        hit[(hr - rmin) * bw + (hc - cmin)] = True
-        free &= ~hit
+        hits = np.zeros(bw * bh, dtype=bool)
+        hits[(hr - rmin) * bw + (hc - cmin)] = True
+        free &= ~hits
         sub = self.logodds[rmin - self.r0:rmax - self.r0 + 1, cmin - self.c0:cmax - self.c0 + 1]
         upd = np.zeros(bw * bh, dtype=np.float32)
-        upd[free] = self.miss * weight
-        upd[hit] = self.hit * weight
+        upd[free] = miss
+        upd[hits] = hit
         sub += upd.reshape(bh, bw)
 
     def to_gridmap(self, frame_id: str = "map") -> GridMap:

@@ -77,6 +77,8 @@ class SlamConfig:
     optimizer_iterations: int = param(15, ge=1, le=1000, doc="Gauss-Newton iterations per optimisation")
     re_render_threshold: float = param(0.02, ge=0, doc="m at max range; re-render a node's scan when it moved "
                                        "more")
+    rerender_nodes_per_scan: int = param(12, ge=1, le=1_000_000, doc="nodes moved by an optimisation are "
+                                         "re-rendered at most this many per process() call (bounds the call)")
     # occupancy grid (log-odds)
     log_odds_hit: float = param(0.85, gt=0, doc="log-odds added per hit")
     log_odds_miss: float = param(-0.4, lt=0, doc="log-odds added per miss")
@@ -139,6 +141,8 @@ class SlamStats:
     loop_rejected: int = 0
     optimizations: int = 0
     last_warning: str = ""
+    map_nodes_rerendered: int = 0  # node scans re-drawn at their optimised pose (spread over calls)
+    map_nodes_pending: int = 0  # moved nodes not yet re-drawn: the published map lags the graph by these
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)

@@ -154,7 +154,12 @@ def test_map_grows_pauses_and_resumes(env: Env) -> None:
         wait_until(lambda: env.stats()["engine"]["scans_integrated"] > s1["engine"]["scans_integrated"], 60,
                    "scans integrated after resume")
         wait_until(lambda: env.stats().get("maps_published", 0) > n_maps, 60, "a new /map after resume")
-        assert env.stats()["engine"]["odom_jumps"] == 0  # driving while paused is not an odometry jump
+        st = env.stats()
+        assert st["engine"]["odom_jumps"] == 0  # driving while paused is not an odometry jump
+        # the status always carries the queue-drop counter (also at 0) and the slowest engine call; not asserted
+        # at 0 here: on a loaded machine a scan can wait on TF long enough for the queue to overflow
+        assert st["scans_dropped_behind"] >= 0, st
+        assert 0 < st["process_ms_max"] < 60_000, st
     finally:
         tf.close()
 

@@ -38,6 +38,7 @@ def run_mapping(world: World, rec: Recording, config: SlamConfig) -> MappingRun:
     for k, (scan, odom) in enumerate(zip(rec.scans, rec.odom, strict=True)):
         if eng.process(scan, odom).integrated:
             idx.append(k)
+    eng.flush()  # after the last scan: draw the nodes still waiting for their re-render budget
     return MappingRun(world, rec, eng, idx)
 
 
