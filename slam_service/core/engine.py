@@ -23,9 +23,11 @@ from robonix_common.scan import Scan
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
+from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
 from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
 from .preprocess import ScanError, prepare_scan
+from .reorder import ReorderBuffer
 from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
 
@@ -73,6 +75,15 @@ class SlamEngine:
         self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
+        self._reorder: ReorderBuffer[tuple[Scan, PoseArray]] = ReorderBuffer(c.reorder_window_s,
+                                                                             c.reorder_adaptive)
+        self._dup_warned = False
+        self._step = StepWindows(c.search_window_xy, c.search_window_theta, False)  # this scan's windows
+        self._step_motion = (0.0, 0.0, 0.0)  # (dist, rot, gap) of this scan's odometry since the last node
+        self._glitch_seed: PoseArray | None = None  # "odometry glitched" seed of a suspect step
+        self._drift = 0.0  # m, position std dev accrued since the last loop closure (loop candidate radius)
+        self._reorder_newest = -math.inf  # newest stamp offered so far
+        self._loc_ref_odom: PoseArray | None = None  # odometry at the last localization match
 
     @property
     def mode(self) -> Mode:
@@ -161,7 +172,7 @@ class SlamEngine:
 
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
-        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy),
+        m = required_margin(max(c.search_window_xy, c.max_search_window_xy, c.loop_search_window_xy),
                             max(c.coarse_factor, c.loop_coarse_factor), c.smear_sigma, grid.resolution)
         pad = int(math.ceil(m / grid.resolution))
         mask = np.pad(grid.data >= 65, pad)
@@ -191,8 +202,10 @@ class SlamEngine:
                       dataclasses.replace(self.stats))
 
     def process(self, scan: Scan, odom_pose: object, stamp: float | None = None) -> Update:
-        """Integrate one scan taken at odometry pose ``odom_pose`` (odom frame). Never raises on bad input."""
-        c = self.config
+        """Integrate one scan taken at odometry pose ``odom_pose`` (odom frame). Never raises on bad input.
+
+        Scans pass a short reorder buffer (``reorder_window_s``): the returned update is that of the last
+        scan released in stamp order (a held scan returns a non-integrated update); :meth:`flush` drains it."""
         self.stats.scans_received += 1
         try:
             odom = as_pose(odom_pose, "odom_pose")
@@ -203,8 +216,32 @@ class SlamEngine:
         t = float(scan.stamp if stamp is None else stamp)
         if not math.isfinite(t):
             return self._skip(f"stamp is not finite: {t}", "scans_skipped_invalid")
-        if self._last_stamp is not None and t < self._last_stamp:
-            return self._skip(f"stamp {t} older than previous {self._last_stamp}", "scans_skipped_time")
+        verdict, due = self._reorder.push(t, (scan, odom), hash(scan.ranges.tobytes()))
+        if verdict == "duplicate":
+            self.stats.scans_duplicate += 1
+            if not self._dup_warned:  # one warning; the counter tells the rest
+                self._dup_warned = True
+                log.warning("slam: skipping exact duplicate scans (stamp %s; counted in scans_duplicate)", t)
+            return self._update(False, False, skipped="duplicate scan")
+        if verdict == "late":
+            return self._skip(f"stamp {t} older than the reorder window allows", "scans_skipped_time")
+        if t < self._reorder_newest:  # accepted although a newer scan came first: sorted into place
+            self.stats.scans_reordered += 1
+        self._reorder_newest = max(self._reorder_newest, t)
+        return self._run(due)
+
+    def flush(self) -> Update:
+        """Process every scan the reorder buffer still holds (end of a log, before a save or a mode switch)."""
+        return self._run(self._reorder.flush())
+
+    def _run(self, due: list[tuple[float, tuple[Scan, PoseArray]]]) -> Update:
+        upd = None
+        for t, (scan, odom) in due:
+            upd = self._process_one(scan, odom, t)
+        return upd if upd is not None else self._update(False, False)
+
+    def _process_one(self, scan: Scan, odom: PoseArray, t: float) -> Update:
+        c = self.config
         try:
             prep = prepare_scan(scan, c.max_range)
         except ScanError as exc:
@@ -212,36 +249,66 @@ class SlamEngine:
         self.stats.beams_nan += prep.n_nan
         self.stats.beams_inf += prep.n_inf
         self.stats.beams_out_of_range += prep.n_out_of_range
+        self.stats.beams_no_return += prep.n_no_return
         if len(prep.points) < c.min_valid_beams:
             return self._skip(f"only {len(prep.points)} usable beams of {scan.ranges.size}", "scans_skipped_invalid")
+        gap = t - self._last_stamp if self._last_stamp is not None else 0.0
         self._last_stamp = t
-
+        self._glitch_seed = None
         if self._initial_pose is not None:  # (re)start: anchor map->odom so the robot is at the given pose
             self._map_to_odom = compose(self._initial_pose, inverse(odom))
             self._initial_pose = None
         elif self._last_odom is not None:
             d = relative(self._last_odom, odom)
-            if math.hypot(d[0], d[1]) > c.max_odom_jump_distance or abs(d[2]) > c.max_odom_jump_heading:
-                # keep the map pose; re-anchor odometry so the jump does not teleport the robot
+            dist = math.hypot(d[0], d[1])
+            if c.drop_odom_jumps and legacy_jump(c, dist, d[2]):
+                # old behaviour (comparisons only): keep the map pose, re-anchor odometry, lose the motion
                 self._map_to_odom = compose(self._pose, inverse(odom))
                 self._last_odom = odom
-                return self._skip(f"odometry jump of {math.hypot(d[0], d[1]):.2f} m / {d[2]:.2f} rad", "odom_jumps")
+                return self._skip(f"odometry jump of {dist:.2f} m / {d[2]:.2f} rad", "odom_jumps")
+            if not c.drop_odom_jumps and suspect_step(c, dist, d[2], gap):
+                self.stats.odom_jumps += 1
+                self._glitch_seed = compose(self._map_to_odom, self._last_odom)  # where the robot was
         self._last_odom = odom
         predicted = compose(self._map_to_odom, odom)
         self._pose = predicted
+        self._set_step(odom, gap)
         if self._mode == "localization":
             return self._localize(prep.points, predicted, odom)
         return self._map_step(prep.points, prep.origin, predicted, odom, t)
+
+    def _set_step(self, odom: PoseArray, gap: float) -> None:
+        """This scan's search windows from its odometry motion since the last node (or localization match)
+        and the data gap before it."""
+        c = self.config
+        ref = self._ref_odom()
+        if ref is None or c.drop_odom_jumps:
+            self._step = StepWindows(c.search_window_xy, c.search_window_theta, False)
+            self._step_motion = (0.0, 0.0, gap)
+            return
+        d = relative(ref, odom)
+        dist = math.hypot(d[0], d[1])
+        self._step_motion = (dist, abs(float(d[2])), gap)
+        self._step = search_windows(c, dist, float(d[2]), gap)
+
+    def _ref_odom(self) -> PoseArray | None:
+        if self._mode == "localization":
+            return self._loc_ref_odom
+        if self._resume_from is not None or not self._odom:
+            return None
+        return self._odom[-1]
 
     def _moved(self, ref: PoseArray, pose: PoseArray) -> bool:
         d = relative(ref, pose)
         return math.hypot(d[0], d[1]) >= self.config.min_travel_distance or abs(d[2]) >= self.config.min_travel_heading
 
-    def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False) -> MatchResult:
+    def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False,
+               step: StepWindows | None = None) -> MatchResult:
         c = self.config
+        step = step or self._step
         return match_scan(lookup, points, seed,
-                          window_xy=c.loop_search_window_xy if loop else c.search_window_xy,
-                          window_theta=c.loop_search_window_theta if loop else c.search_window_theta,
+                          window_xy=c.loop_search_window_xy if loop else step.xy,
+                          window_theta=c.loop_search_window_theta if loop else step.theta,
                           angular_step=c.angular_step, coarse_factor=c.loop_coarse_factor if loop else c.coarse_factor,
                           refine=c.refine, sigma=c.smear_sigma, penalty=0.0 if loop else c.match_penalty)
 
@@ -251,11 +318,15 @@ class SlamEngine:
         if self._last_match_pose is not None and not self._moved(self._last_match_pose, predicted):
             self.stats.scans_gated += 1
             return self._update(False, False)
-        m = self._match(self._fixed_lookup, points, predicted)
+        m = self._seq_match(self._fixed_lookup, points, predicted)
         self._last_match_pose = predicted
         if m.response < self.config.min_response:
             self.stats.match_failures += 1
+            if self._glitch_seed is not None:  # suspect step, no match either way: do not follow the glitch
+                self._pose = self._glitch_seed
+                self._map_to_odom = compose(self._glitch_seed, inverse(odom))
             return self._update(False, False, response=m.response)
+        self._loc_ref_odom = odom
         self._pose = m.pose
         self._map_to_odom = compose(m.pose, inverse(odom))
         self._last_match_pose = m.pose
@@ -273,17 +344,29 @@ class SlamEngine:
         if n == 0:
             pose, cov, kind = predicted, None, EDGE_ODOM
         else:
-            if (self._running is None or self._resume_from is not None
-                    or n - self._running_built_at >= c.lookup_rebuild_nodes):
-                self._running = self._build_running(predicted, points)
-                self._running_built_at = n
-            m = self._match(self._running, points, predicted)
+            unusual = self._step.wide or self._glitch_seed is not None
+            if unusual:  # a one-off lookup big enough for the widened windows and both seeds
+                lookup = self._build_wide(predicted, points)
+                self._running = None
+            else:
+                if (self._running is None or self._resume_from is not None
+                        or n - self._running_built_at >= c.lookup_rebuild_nodes):
+                    self._running = self._build_running(predicted, points)
+                    self._running_built_at = n
+                lookup = self._running
+            m = self._seq_match(lookup, points, predicted)
             response = m.response
             if m.response >= c.min_response:
                 pose, cov, kind = m.pose, m.covariance, EDGE_SEQUENTIAL
             else:
                 self.stats.match_failures += 1
                 pose, cov, kind = predicted, None, EDGE_ODOM
+                if unusual:  # never dropped: the odometry (or, for a glitch, "did not move") with a large covariance
+                    self.stats.unmatched_steps += 1
+                    if self._glitch_seed is not None:
+                        pose = self._glitch_seed
+                    sxy, sth = unmatched_sigmas(c, *self._step_motion)
+                    cov = np.diag([sxy**2, sxy**2, sth**2])
         k = self.graph.add_node(pose)
         if n:
             ref = self.graph.poses[prev]
@@ -294,6 +377,10 @@ class SlamEngine:
                 info = _info_in_frame(cov, ref[2])
             self.graph.add_edge(prev, k, z, info, kind)
         dist = 0.0 if n == 0 else float(np.hypot(*(pose[:2] - self.graph.poses[prev][:2])))
+        if n and kind == EDGE_ODOM:  # unmatched: its whole uncertainty adds to the drift
+            self._drift += math.sqrt(cov[0, 0]) if cov is not None else c.odom_sigma_xy
+        else:
+            self._drift += c.loop_drift_per_m * dist
         self._path.append((self._path[prev] if n else 0.0) + dist)
         self._odom.append(odom)
         self._stamps.append(t)
@@ -306,8 +393,39 @@ class SlamEngine:
         loop = False
         if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
             loop = self._try_loop_closure(k)
+            if loop:
+                self._drift = 0.0
         self.stats.scans_integrated += 1
         return self._update(True, True, response=response, loop=loop)
+
+    def _seq_match(self, lookup: LookupGrid, points: NDArray, predicted: PoseArray) -> MatchResult:
+        """Sequential match at the odometry prediction with this scan's (possibly widened) windows; for a
+        suspect step also at "the robot did not move" (normal windows): the better response wins."""
+        if self._step.wide:
+            self.stats.wide_searches += 1
+        m = self._match(lookup, points, predicted)
+        if self._glitch_seed is not None:
+            c = self.config
+            alt = self._match(lookup, points, self._glitch_seed,
+                              step=StepWindows(c.search_window_xy, c.search_window_theta, False))
+            if alt.response > m.response:
+                self.stats.odom_glitches += 1
+                return alt
+        return m
+
+    def _build_wide(self, predicted: PoseArray, points: NDArray) -> LookupGrid:
+        """Running-submap lookup for a wide or suspect step: centred on the robot, covering every heading
+        and both seeds, with the margin the widened window needs."""
+        c = self.config
+        n = self.graph.n_nodes
+        nodes = range(max(0, n - c.running_buffer_size), n)
+        margin = required_margin(self._step.xy, c.coarse_factor, c.smear_sigma, c.resolution)
+        seeds = [predicted[:2]] + ([self._glitch_seed[:2]] if self._glitch_seed is not None else [])
+        centre = np.mean(seeds, axis=0)
+        spread = max(float(np.hypot(*(p - centre))) for p in seeds)
+        reach = float(np.max(np.hypot(points[:, 0], points[:, 1])))
+        return LookupGrid.from_points(self._node_points_map(nodes), c.resolution, c.smear_sigma, margin,
+                                      center=centre, half_extent=reach + spread + self._step.xy + 0.3)
 
     def _node_points_map(self, nodes: NDArray | list[int]) -> NDArray:
         poses = self.graph.poses
@@ -341,10 +459,11 @@ class SlamEngine:
         if len(old) == 0:
             return False
         d = np.hypot(*(poses[old, :2] - poses[k, :2]).T)
-        near = old[d <= c.loop_search_radius]
+        radius = loop_radius(c, self._drift)
+        near = old[d <= radius]
         if len(near) == 0:
             return False
-        cand = int(near[np.argmin(d[d <= c.loop_search_radius])])
+        cand = int(near[np.argmin(d[d <= radius])])
         sub = old[np.hypot(*(poses[old, :2] - poses[cand, :2]).T) <= c.loop_submap_radius]
         key = (tuple(int(i) for i in sub), self.stats.optimizations)
         if self._loop_lookup is None or self._loop_lookup[0] != key:
