@@ -11,7 +11,7 @@ pose. Each scenario then rewrites that stream the way a real system breaks it an
   position stays continuous, later motion is rotated by the jump);
 - ``shuffled``: every scan delivered up to 0.3 s late, so the stream is out of stamp order;
 - ``scanner_180``: a 180° scanner (front half of the beams) with a 30 m range that reports "no return" as
-  its range_max sentinel;
+  its range_max sentinel (3 % of beams: dark or specular surfaces);
 - ``clean``: the stream as recorded (reference).
 
 Scores: ATE (RMSE of node positions vs ground truth at their stamps, start frame, no alignment) and the
@@ -176,16 +176,18 @@ def shuffled(rec: Recording, rng: np.random.Generator, late: float = 0.3) -> Del
     return Delivery(out, f"delays up to {late:g} s: {moved} of {len(order)} scans out of place")
 
 
-def scanner_180(rec: Recording, rng: np.random.Generator, range_max: float = 30.0) -> Delivery:
-    """The front 180° of the beams, a 30 m range, "no return" reported as range_max (not +inf)."""
+def scanner_180(rec: Recording, rng: np.random.Generator, range_max: float = 30.0, dark: float = 0.03) -> Delivery:
+    """The front 180° of the beams, a 30 m range, "no return" reported as range_max (not +inf); a fraction
+    ``dark`` of the beams (dark or specular surfaces) return nothing, i.e. the sentinel."""
     ang = rec.angle_min + rec.angle_increment * np.arange(len(rec.frames[0].ranges))
     keep = np.flatnonzero(np.abs(ang) <= math.pi / 2 + 1e-9)
     out = []
     for f in rec.frames:
         r = f.ranges[keep].copy()
-        r[~np.isfinite(r)] = range_max
+        r[~np.isfinite(r) | (rng.random(r.size) < dark)] = range_max
         out.append((_scan(rec, f, r, angle_min=float(ang[keep[0]]), range_max=range_max), f.odom))
-    return Delivery(out, f"{len(keep)} beams over 180°, range_max {range_max:g} m as the no-return sentinel")
+    return Delivery(out, f"{len(keep)} beams over 180°, range_max {range_max:g} m as the no-return sentinel "
+                    f"({dark:.0%} of beams)")
 
 
 FAULTS: dict[str, Callable[..., Delivery]] = {"clean": clean, "gap_turn": gap_turn, "heading_jumps": heading_jumps,
