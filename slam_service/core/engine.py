@@ -58,6 +58,8 @@ class SlamEngine:
         self._path: list[float] = []
         self._points: list[NDArray[np.float32]] = []
         self._origins: list[NDArray[np.float64]] = []
+        self._free: dict[int, NDArray[np.float32]] = {}  # node -> base-frame ends of its no-return beams (capped)
+        self._free_ends = np.zeros((0, 2), dtype=np.float32)  # this scan's
         self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
         self.grid = LogOddsGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
                                   hi=c.log_odds_max, occupied_threshold=c.occupied_threshold,
@@ -243,7 +245,7 @@ class SlamEngine:
     def _process_one(self, scan: Scan, odom: PoseArray, t: float) -> Update:
         c = self.config
         try:
-            prep = prepare_scan(scan, c.max_range)
+            prep = prepare_scan(scan, c.max_range, c.no_return_clear_range)
         except ScanError as exc:
             return self._skip(str(exc), "scans_skipped_invalid")
         self.stats.beams_nan += prep.n_nan
@@ -275,6 +277,7 @@ class SlamEngine:
         self._set_step(odom, gap)
         if self._mode == "localization":
             return self._localize(prep.points, predicted, odom)
+        self._free_ends = prep.free_ends if prep.free_ends is not None else self._free_ends[:0]
         return self._map_step(prep.points, prep.origin, predicted, odom, t)
 
     def _set_step(self, odom: PoseArray, gap: float) -> None:
@@ -386,6 +389,8 @@ class SlamEngine:
         self._stamps.append(t)
         self._points.append(np.asarray(points, dtype=np.float32))
         self._origins.append(np.asarray(origin, dtype=float))
+        if len(self._free_ends):
+            self._free[k] = self._free_ends
         self._resume_from = None
         self._render_node(k, pose)
         self._pose = pose.copy()
@@ -594,6 +599,7 @@ class SlamEngine:
 
     def _render_node(self, k: int, pose: NDArray) -> None:
         org, pts = self._origins[k], self._points[k]
+        old = None
         if k < len(self._rendered):
             old = self._rendered[k]
             self.grid.integrate(transform_points(old, org[None])[0], transform_points(old, pts), weight=-1.0)
@@ -601,7 +607,16 @@ class SlamEngine:
         else:
             self._rendered.append(pose.copy())
         self.grid.integrate(transform_points(pose, org[None])[0], transform_points(pose, pts))
+        if k in self._free:  # no-return beams clear free space; moved with the scan like its hits
+            if old is not None:
+                self._clear_free(k, old, -1.0)
+            self._clear_free(k, pose, 1.0)
         self._map_cache = None
+
+    def _clear_free(self, k: int, pose: NDArray, weight: float) -> None:
+        org = transform_points(pose, self._origins[k][None])[0]
+        self.grid.integrate_free(org, transform_points(pose, self._free[k]), transform_points(pose, self._points[k]),
+                                 weight=weight)
 
     def _rerender(self, moved_only: bool = False) -> int:
         """Re-render nodes from their (optimised) poses: all of them, or only those that moved more than

@@ -103,6 +103,31 @@ class LogOddsGrid:
         upd[hit] = self.hit * weight
         sub += upd.reshape(bh, bw)
 
+    def integrate_free(self, origin: NDArray, ends: NDArray, hits: NDArray, weight: float = 1.0) -> None:
+        """Clear along no-return beams: a miss on each cell from ``origin`` to ``ends`` (the beam capped at
+        a clearing range), never a hit, and no miss on a cell the same scan's ``hits`` occupy."""
+        e = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
+        if len(e) == 0:
+            return
+        o = np.asarray(origin, dtype=np.float64)
+        res = self.resolution
+        vec = e - o
+        length = np.hypot(vec[:, 0], vec[:, 1])
+        ns = np.floor(length / (0.5 * res)).astype(np.int64) + 1
+        beam = np.repeat(np.arange(len(e)), ns)
+        t = (np.arange(int(ns.sum())) - np.repeat(np.cumsum(ns) - ns, ns)) * (0.5 * res)
+        unit = vec / np.maximum(length, 1e-9)[:, None]
+        cells = np.unique(np.stack([np.floor((o[1] + unit[beam, 1] * t) / res),
+                                    np.floor((o[0] + unit[beam, 0] * t) / res)], axis=1).astype(np.int64), axis=0)
+        h = np.asarray(hits, dtype=np.float64).reshape(-1, 2)
+        if len(h):
+            hit = np.unique(np.floor(h[:, ::-1] / res).astype(np.int64), axis=0)
+            cells = cells[~np.isin(cells[:, 0] * (1 << 32) + cells[:, 1], hit[:, 0] * (1 << 32) + hit[:, 1])]
+        if len(cells) == 0:
+            return
+        self._ensure(int(cells[:, 1].min()), int(cells[:, 0].min()), int(cells[:, 1].max()), int(cells[:, 0].max()))
+        self.logodds[cells[:, 0] - self.r0, cells[:, 1] - self.c0] += np.float32(self.miss * weight)
+
     def to_gridmap(self, frame_id: str = "map") -> GridMap:
         """Trinary export: -1 unknown, 0 free, 100 occupied (thresholds on log-odds)."""
         lo = self.logodds

@@ -7,8 +7,10 @@ is the smaller of the scan's ``range_max`` and the config's ``max_range``, and t
 (from TF in the provider) places the points in the robot base frame.
 
 A reading at or beyond the scan's ``range_max`` is the driver's "no return" sentinel (many drivers report
-range_max, some +inf): it is not an obstacle. Its direction is kept (``free_dirs``) so the map may clear
-free space along it up to a cap, but it never becomes a hit.
+range_max, some +inf): it is not an obstacle, never a hit. It may clear free space, up to a cap and never
+past its neighbours: a no-return beam between beams that hit a wall 2 m away is a dropout (dark or specular
+spot, a simulated dropout) and says nothing about the wall itself (clearing through it measured IoU
+0.95 -> 0.42 on the hard sim loop); one among far or no-return neighbours is open space.
 """
 
 from __future__ import annotations
@@ -34,11 +36,16 @@ class PreparedScan:
     n_inf: int
     n_out_of_range: int
     n_no_return: int = 0  # readings >= range_max or +inf: no obstacle within range
-    free_dirs: NDArray[np.float64] | None = None  # (F,) base-frame beam angles of no-return beams
+    free_ends: NDArray[np.float32] | None = None  # (F, 2) base-frame ends of the free stretch of no-return beams
 
 
-def prepare_scan(scan: Scan, max_range: float) -> PreparedScan:
-    """Valid beams -> base-frame endpoints. Raises ScanError only for malformed metadata."""
+NEIGHBOURS = 2  # beams on each side that bound a no-return beam's clearing
+CLEAR_MARGIN = 0.1  # m short of the nearest neighbour's return
+
+
+def prepare_scan(scan: Scan, max_range: float, clear_range: float = 0.0) -> PreparedScan:
+    """Valid beams -> base-frame endpoints; no-return beams -> free stretches of at most ``clear_range`` m.
+    Raises ScanError only for malformed metadata."""
     for name in ("angle_min", "angle_increment", "range_min", "range_max"):
         v = getattr(scan, name)
         if not isinstance(v, int | float | np.floating) or not math.isfinite(v):
@@ -63,6 +70,20 @@ def prepare_scan(scan: Scan, max_range: float) -> PreparedScan:
     ang = scan.angle_min + scan.angle_increment * idx[ok] + mount[2]
     rr = r[ok].astype(np.float64)
     pts = np.stack([mount[0] + rr * np.cos(ang), mount[1] + rr * np.sin(ang)], axis=1).astype(np.float32)
-    free = scan.angle_min + scan.angle_increment * idx[no_return] + mount[2]
     return PreparedScan(pts, mount[:2].copy(), int(nan.sum()), int(inf.sum()), out,
-                        int(np.count_nonzero(no_return)), free)
+                        int(np.count_nonzero(no_return)), _free_ends(scan, r, no_return, ok, mount, clear_range))
+
+
+def _free_ends(scan: Scan, r: NDArray, no_return: NDArray, ok: NDArray, mount: NDArray,
+               clear_range: float) -> NDArray[np.float32]:
+    if clear_range <= 0 or not no_return.any():
+        return np.zeros((0, 2), dtype=np.float32)
+    near = np.where(ok, r, np.inf).astype(np.float64)  # what each beam says is free (inf: as far as it knows)
+    padded = np.pad(near, NEIGHBOURS, constant_values=np.inf)
+    bound = np.min([padded[NEIGHBOURS + d:NEIGHBOURS + d + r.size] for d in range(-NEIGHBOURS, NEIGHBOURS + 1)
+                    if d != 0], axis=0)
+    reach = np.minimum(clear_range, bound - CLEAR_MARGIN)[no_return]
+    sel = reach > 0
+    ang = scan.angle_min + scan.angle_increment * np.flatnonzero(no_return)[sel] + mount[2]
+    reach = reach[sel]
+    return np.stack([mount[0] + reach * np.cos(ang), mount[1] + reach * np.sin(ang)], axis=1).astype(np.float32)

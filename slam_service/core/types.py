@@ -112,6 +112,8 @@ class SlamConfig:
                                           "pose uncertainty since the last loop closure up to this")
     loop_drift_per_m: float = param(0.01, ge=0, le=1.0, doc="m of position std dev accrued per m of matched travel "
                                     "(3 sigma widens the loop candidate radius)")
+    no_return_clear_range: float = param(3.0, ge=0, le=100.0, doc="m; beams with no return (the range_max "
+                                         "sentinel or +inf) clear free space this far, never a hit; 0 = off")
     # stamps
     reorder_window_s: float = param(0.3, ge=0, le=5.0, doc="s; scans up to this late are sorted into stamp order "
                                     "(output delayed by at most this); later ones are skipped")

@@ -37,7 +37,7 @@ def test_points_land_on_the_walls_and_the_sentinel_is_no_return(fov: float, step
     r[~hit] = rmax  # the driver reports "nothing within range" as range_max
     r[::37] = np.nan  # glass
     r[5::41] = np.inf  # another driver's no-return
-    prep = prepare_scan(scan, max_range=rmax)
+    prep = prepare_scan(scan, max_range=rmax, clear_range=3.0)
     assert prep.n_nan == np.count_nonzero(np.isnan(r))
     assert prep.n_no_return == np.count_nonzero((r >= rmax) | np.isposinf(r))
     usable = np.isfinite(r) & (r < rmax)
@@ -49,8 +49,10 @@ def test_points_land_on_the_walls_and_the_sentinel_is_no_return(fov: float, step
     got = transform_points(pose, prep.points.astype(np.float64))
     assert np.abs(got - expect).max() < 1e-3
     assert np.allclose(prep.origin, MOUNT[:2])
-    assert prep.free_dirs is not None
-    assert len(prep.free_dirs) == prep.n_no_return
+    assert prep.free_ends is not None
+    reach = np.hypot(*(prep.free_ends - np.asarray(MOUNT[:2])).T)
+    assert len(reach) <= prep.n_no_return
+    assert np.all(reach <= 3.0 + 1e-5)
 
 
 def test_missing_intensities_and_a_zero_increment() -> None:
@@ -76,3 +78,35 @@ def test_engine_maps_the_apartment_with_any_scanner(fov: float, step: float, rma
             idx.append(k)
     assert len(idx) > 50
     assert ate_rmse(eng.trajectory(), rec.gt[idx]) < 0.05
+
+
+def _ring_map(clear: float, sentinel: np.ndarray):
+    r = np.full(360, 2.0, np.float32)
+    r[sentinel] = 30.0  # the sentinel: nothing within range
+    eng = SlamEngine(SlamConfig(max_range=30.0, no_return_clear_range=clear))
+    assert eng.process(Scan(r, -math.pi, math.radians(1.0), 0.05, 30.0, 0.0), [0, 0, 0]).integrated
+    return eng.map()
+
+
+def _cell(grid, x: float, y: float) -> int:
+    c, r = (int(v) for v in grid.world_to_cell(x, y))
+    h, w = grid.data.shape
+    return int(grid.data[r, c]) if 0 <= r < h and 0 <= c < w else -1
+
+
+def test_no_return_sector_clears_free_space_up_to_the_cap_but_never_hits() -> None:
+    opening = np.arange(170, 190)  # 20° around +x (beam 180 points at angle 0)
+    off, on = _ring_map(0.0, opening), _ring_map(3.0, opening)
+    assert _cell(off, 2.6, 0.0) == -1  # without clearing nothing is known beyond the ring's radius
+    assert _cell(on, 2.6, 0.0) == 0  # free along the no-return beams ...
+    assert _cell(on, 2.0, 0.0) == 0  # ... where the ring has its opening (no hit there)
+    assert _cell(on, 3.4, 0.0) == -1  # ... but not past the cap
+    assert _cell(on, -2.0, 0.0) == 100  # the rest of the ring is a wall
+
+
+def test_a_single_dropout_does_not_clear_the_wall_behind_it() -> None:
+    grid = _ring_map(3.0, np.array([180]))  # one no-return beam among hits at 2 m
+    a = math.radians(1.0)
+    assert _cell(grid, 2.0 * math.cos(a), 2.0 * math.sin(a)) == 100  # its neighbour's wall hit stays
+    assert _cell(grid, 1.0, 0.0) == 0  # short of the wall it may clear
+    assert _cell(grid, 2.3, 0.0) == -1  # behind the wall it clears nothing
