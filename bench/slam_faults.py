@@ -16,7 +16,16 @@ import time
 from dataclasses import asdict
 from pathlib import Path
 
-from robonix_eval.slam_faults import ATE_TARGET, IOU_TARGET, SCENARIOS, SHORT_TOUR, TOUR, record, run_scenario
+from robonix_eval.slam_faults import (
+    ATE_TARGET,
+    IOU_TARGET,
+    NARROW_FOV_CONFIG,
+    SCENARIOS,
+    SHORT_TOUR,
+    TOUR,
+    record,
+    run_scenario,
+)
 from slam_service.core import SlamConfig
 
 
@@ -36,8 +45,8 @@ def main() -> int:
         rec = record(route, seed=seed)
         for sc in SCENARIOS:
             new = run_scenario(rec, sc, seed=seed)
-            old_cfg = SlamConfig(drop_odom_jumps=True, reorder_window_s=0.0,
-                                 max_range=30.0 if sc == "scanner_180" else 12.0)
+            base = NARROW_FOV_CONFIG if sc == "scanner_180" else SlamConfig()
+            old_cfg = SlamConfig.from_dict({**base.to_dict(), "drop_odom_jumps": True, "reorder_window_s": 0.0})
             old = run_scenario(rec, sc, seed=seed, config=old_cfg)
             rows.append({"seed": seed, "scenario": sc, "note": new.note, "drive_completed": rec.reached,
                          "new": {**asdict(new), "passed": new.passed},

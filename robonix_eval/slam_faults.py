@@ -42,6 +42,10 @@ TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2), (2.6, 7.0), (4
 # The short tour for tests: the half-turn and a few metres either side of it.
 SHORT_TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2))
 SCENARIOS = ("clean", "gap_turn", "heading_jumps", "shuffled", "scanner_180")
+# A 180° scanner sees half of what a 360° one does, so consecutive nodes overlap less: integrate every
+# 0.1 m / 0.1 rad instead of 0.2 (seeds 0-2, IoU 0.873 / 0.890 / 0.935 -> 0.956 / 0.955 / 0.957), and use
+# the long-range scanner's whole range.
+NARROW_FOV_CONFIG = SlamConfig(max_range=30.0, min_travel_distance=0.1, min_travel_heading=0.1)
 ATE_TARGET = 0.05  # m
 IOU_TARGET = 0.9
 
@@ -216,7 +220,7 @@ def run_scenario(rec: Recording, scenario: str, *, seed: int = 0, config: SlamCo
         raise ValueError(f"scenario must be one of {', '.join(FAULTS)}, got {scenario!r}")
     delivery = FAULTS[scenario](rec, np.random.default_rng(seed))
     if config is None and scenario == "scanner_180":
-        config = SlamConfig(max_range=30.0)  # use the long-range scanner's whole range
+        config = NARROW_FOV_CONFIG
     eng, seconds = replay(rec, delivery, config)
     ate, iou = score(rec, eng)
     return FaultResult(scenario, ate, iou, eng.graph.n_nodes, len(delivery.scans), seconds, eng.stats.to_dict(),

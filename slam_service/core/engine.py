@@ -95,6 +95,7 @@ class SlamEngine:
         """Switch mapping <-> localization; localization uses the loaded map or the current one."""
         if mode not in ("mapping", "localization"):
             raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
+        self.flush()  # scans held for reordering belong to the old mode
         if mode == "localization" and self._fixed_lookup is None:
             if self.graph.n_nodes == 0:
                 raise ValueError("localization needs a map: load one or map first")
