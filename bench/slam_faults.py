@@ -20,6 +20,7 @@ from robonix_eval.slam_faults import (
     ATE_TARGET,
     IOU_TARGET,
     NARROW_FOV_CONFIG,
+    SCANNER_DRIVES,
     SCENARIOS,
     SHORT_TOUR,
     TOUR,
@@ -42,10 +43,12 @@ def main() -> int:
     rows = []
     t0 = time.perf_counter()
     for seed in range(args.seeds):
-        rec = record(route, seed=seed)
+        base_rec = record(route, seed=seed)
         for sc in SCENARIOS:
+            rec = record(route, seed=seed, lidar=SCANNER_DRIVES[sc]) if sc in SCANNER_DRIVES else base_rec
             new = run_scenario(rec, sc, seed=seed)
-            base = NARROW_FOV_CONFIG if sc == "scanner_180" else SlamConfig()
+            base = NARROW_FOV_CONFIG if sc == "scanner_180" else SlamConfig(max_range=30.0) \
+                if sc in SCANNER_DRIVES else SlamConfig()
             old_cfg = SlamConfig.from_dict({**base.to_dict(), "drop_odom_jumps": True, "reorder_window_s": 0.0})
             old = run_scenario(rec, sc, seed=seed, config=old_cfg)
             rows.append({"seed": seed, "scenario": sc, "note": new.note, "drive_completed": rec.reached,

@@ -12,6 +12,8 @@ pose. Each scenario then rewrites that stream the way a real system breaks it an
 - ``shuffled``: every scan delivered up to 0.3 s late, so the stream is out of stamp order;
 - ``scanner_180``: a 180° scanner (front half of the beams) with a 30 m range that reports "no return" as
   its range_max sentinel (3 % of beams: dark or specular surfaces);
+- ``scanner_270``: the sim's lidar swapped for a 270° scanner with 0.25° steps (1081 beams) and an 80 m
+  range that reports "no return" as range_max, 3 % of beams too (its own recording: :data:`SCANNER_DRIVES`);
 - ``clean``: the stream as recorded (reference).
 
 Scores: ATE (RMSE of node positions vs ground truth at their stamps, start frame, no alignment) and the
@@ -20,6 +22,7 @@ occupied-cell IoU of the map against the scene's ground-truth raster (observed w
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -41,7 +44,10 @@ TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2), (2.6, 7.0), (4
                               (2.6, 7.0), (2.6, 4.45), (3.8, 4.45))
 # The short tour for tests: the half-turn and a few metres either side of it.
 SHORT_TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2))
-SCENARIOS = ("clean", "gap_turn", "heading_jumps", "shuffled", "scanner_180")
+SCENARIOS = ("clean", "gap_turn", "heading_jumps", "shuffled", "scanner_180", "scanner_270")
+# Scenarios driven with a different lidar (LidarSpec overrides): they need their own recording.
+SCANNER_DRIVES: dict[str, dict[str, float]] = {"scanner_270": {"beams": 1081, "fov": 1.5 * math.pi,
+                                                               "range_max": 80.0}}
 # A 180° scanner sees half of what a 360° one does, so consecutive nodes overlap less: integrate every
 # 0.1 m / 0.1 rad instead of 0.2 (seeds 0-2, IoU 0.873 / 0.890 / 0.935 -> 0.956 / 0.955 / 0.957), and use
 # the long-range scanner's whole range.
@@ -98,9 +104,12 @@ class FaultResult:
 
 
 def record(route: Sequence[Waypoint] = TOUR, *, scene: str = "apartment", seed: int = 0, resolution: float = 0.05,
-           leg_timeout: float = 40.0) -> Recording:
-    """Drive ``route`` in the sim (realistic odometry drift, 1 cm lidar noise) and record every scan."""
+           leg_timeout: float = 40.0, lidar: dict[str, float] | None = None) -> Recording:
+    """Drive ``route`` in the sim (realistic odometry drift, 1 cm lidar noise) and record every scan;
+    ``lidar`` overrides fields of the robot's LidarSpec (beams, fov, range_max)."""
     robot = load_robot_description()
+    if lidar:
+        robot = dataclasses.replace(robot, lidar=dataclasses.replace(robot.lidar, **lidar))
     sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=OdomNoise.realistic(),
                          lidar_noise=LidarNoise(noise_std=0.01))
     mx, my, _, myaw = robot.lidar.mount
@@ -194,8 +203,23 @@ def scanner_180(rec: Recording, rng: np.random.Generator, range_max: float = 30.
                     f"({dark:.0%} of beams)")
 
 
+def scanner_270(rec: Recording, rng: np.random.Generator, dark: float = 0.03) -> Delivery:
+    """The recording's own (270°, 0.25°, 80 m) lidar; no return (and ``dark`` of the beams) reported as
+    range_max, the sentinel."""
+    out = []
+    for f in rec.frames:
+        r = f.ranges.copy()
+        r[~np.isfinite(r) | (rng.random(r.size) < dark)] = rec.range_max
+        out.append((_scan(rec, f, r), f.odom))
+    n = len(rec.frames[0].ranges)
+    return Delivery(out, f"{n} beams over {math.degrees(rec.angle_increment * (n - 1)):.0f}° at "
+                    f"{math.degrees(rec.angle_increment):.2f}°, range_max {rec.range_max:g} m as the sentinel "
+                    f"({dark:.0%} of beams)")
+
+
 FAULTS: dict[str, Callable[..., Delivery]] = {"clean": clean, "gap_turn": gap_turn, "heading_jumps": heading_jumps,
-                                              "shuffled": shuffled, "scanner_180": scanner_180}
+                                              "shuffled": shuffled, "scanner_180": scanner_180,
+                                              "scanner_270": scanner_270}
 
 
 def replay(rec: Recording, delivery: Delivery, config: SlamConfig | None = None) -> tuple[SlamEngine, float]:
@@ -221,6 +245,8 @@ def run_scenario(rec: Recording, scenario: str, *, seed: int = 0, config: SlamCo
     delivery = FAULTS[scenario](rec, np.random.default_rng(seed))
     if config is None and scenario == "scanner_180":
         config = NARROW_FOV_CONFIG
+    if config is None and scenario in SCANNER_DRIVES:
+        config = SlamConfig(max_range=30.0)
     eng, seconds = replay(rec, delivery, config)
     ate, iou = score(rec, eng)
     return FaultResult(scenario, ate, iou, eng.graph.n_nodes, len(delivery.scans), seconds, eng.stats.to_dict(),

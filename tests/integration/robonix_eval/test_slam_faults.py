@@ -11,7 +11,15 @@ from __future__ import annotations
 
 import pytest
 
-from robonix_eval.slam_faults import ATE_TARGET, IOU_TARGET, SHORT_TOUR, Recording, record, run_scenario
+from robonix_eval.slam_faults import (
+    ATE_TARGET,
+    IOU_TARGET,
+    SCANNER_DRIVES,
+    SHORT_TOUR,
+    Recording,
+    record,
+    run_scenario,
+)
 from slam_service.core import SlamConfig
 
 
@@ -46,3 +54,12 @@ def test_other_fault_scenarios_meet_the_targets(rec: Recording, scenario: str) -
         assert r.stats["scans_skipped_time"] <= 1
     if scenario == "scanner_180":
         assert r.stats["beams_no_return"] > 0
+
+
+def test_a_270_degree_quarter_degree_80_m_scanner_maps_the_tour() -> None:
+    rec = record(SHORT_TOUR, seed=0, lidar=SCANNER_DRIVES["scanner_270"])
+    assert len(rec.frames[0].ranges) == 1081
+    r = run_scenario(rec, "scanner_270")
+    assert r.stats["beams_no_return"] > 0
+    assert r.ate <= ATE_TARGET, r
+    assert r.iou >= IOU_TARGET, r
