@@ -26,7 +26,7 @@ from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, requ
 from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
 from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
-from .preprocess import ScanError, prepare_scan
+from .preprocess import PreparedScan, ScanError, prepare_scan
 from .reorder import ReorderBuffer
 from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
@@ -59,7 +59,7 @@ class SlamEngine:
         self._points: list[NDArray[np.float32]] = []
         self._origins: list[NDArray[np.float64]] = []
         self._free: dict[int, NDArray[np.float32]] = {}  # node -> base-frame ends of its no-return beams (capped)
-        self._free_ends = np.zeros((0, 2), dtype=np.float32)  # this scan's
+        self._prep: PreparedScan | None = None  # the scan being processed
         self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
         self.grid = LogOddsGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
                                   hi=c.log_odds_max, occupied_threshold=c.occupied_threshold,
@@ -246,7 +246,7 @@ class SlamEngine:
     def _process_one(self, scan: Scan, odom: PoseArray, t: float) -> Update:
         c = self.config
         try:
-            prep = prepare_scan(scan, c.max_range, c.no_return_clear_range)
+            prep = prepare_scan(scan, c.max_range)
         except ScanError as exc:
             return self._skip(str(exc), "scans_skipped_invalid")
         self.stats.beams_nan += prep.n_nan
@@ -278,7 +278,7 @@ class SlamEngine:
         self._set_step(odom, gap)
         if self._mode == "localization":
             return self._localize(prep.points, predicted, odom)
-        self._free_ends = prep.free_ends if prep.free_ends is not None else self._free_ends[:0]
+        self._prep = prep  # its no-return clearing is computed only if it becomes a node
         return self._map_step(prep.points, prep.origin, predicted, odom, t)
 
     def _set_step(self, odom: PoseArray, gap: float) -> None:
@@ -390,8 +390,10 @@ class SlamEngine:
         self._stamps.append(t)
         self._points.append(np.asarray(points, dtype=np.float32))
         self._origins.append(np.asarray(origin, dtype=float))
-        if len(self._free_ends):
-            self._free[k] = self._free_ends
+        if self._prep is not None:
+            ends = self._prep.free_ends(c.no_return_clear_range)
+            if len(ends):
+                self._free[k] = ends
         self._resume_from = None
         self._render_node(k, pose)
         self._pose = pose.copy()

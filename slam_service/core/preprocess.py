@@ -36,16 +36,22 @@ class PreparedScan:
     n_inf: int
     n_out_of_range: int
     n_no_return: int = 0  # readings >= range_max or +inf: no obstacle within range
-    free_ends: NDArray[np.float32] | None = None  # (F, 2) base-frame ends of the free stretch of no-return beams
+    _clear: tuple | None = None  # what free_ends needs (kept so gated scans never pay for it)
+
+    def free_ends(self, clear_range: float) -> NDArray[np.float32]:
+        """(F, 2) base-frame ends of the free stretch of each no-return beam, at most ``clear_range`` m."""
+        if self._clear is None or clear_range <= 0:
+            return np.zeros((0, 2), dtype=np.float32)
+        return _free_ends(*self._clear, clear_range)
 
 
 NEIGHBOURS = 2  # beams on each side that bound a no-return beam's clearing
 CLEAR_MARGIN = 0.1  # m short of the nearest neighbour's return
 
 
-def prepare_scan(scan: Scan, max_range: float, clear_range: float = 0.0) -> PreparedScan:
-    """Valid beams -> base-frame endpoints; no-return beams -> free stretches of at most ``clear_range`` m.
-    Raises ScanError only for malformed metadata."""
+def prepare_scan(scan: Scan, max_range: float) -> PreparedScan:
+    """Valid beams -> base-frame endpoints (no-return beams' free stretches on demand:
+    :meth:`PreparedScan.free_ends`). Raises ScanError only for malformed metadata."""
     for name in ("angle_min", "angle_increment", "range_min", "range_max"):
         v = getattr(scan, name)
         if not isinstance(v, int | float | np.floating) or not math.isfinite(v):
@@ -70,14 +76,13 @@ def prepare_scan(scan: Scan, max_range: float, clear_range: float = 0.0) -> Prep
     ang = scan.angle_min + scan.angle_increment * idx[ok] + mount[2]
     rr = r[ok].astype(np.float64)
     pts = np.stack([mount[0] + rr * np.cos(ang), mount[1] + rr * np.sin(ang)], axis=1).astype(np.float32)
-    return PreparedScan(pts, mount[:2].copy(), int(nan.sum()), int(inf.sum()), out,
-                        int(np.count_nonzero(no_return)), _free_ends(scan, r, no_return, ok, mount, clear_range))
+    n_none = int(np.count_nonzero(no_return))
+    return PreparedScan(pts, mount[:2].copy(), int(nan.sum()), int(inf.sum()), out, n_none,
+                        (scan, r, no_return, ok, mount) if n_none else None)
 
 
 def _free_ends(scan: Scan, r: NDArray, no_return: NDArray, ok: NDArray, mount: NDArray,
                clear_range: float) -> NDArray[np.float32]:
-    if clear_range <= 0 or not no_return.any():
-        return np.zeros((0, 2), dtype=np.float32)
     near = np.where(ok, r, np.inf).astype(np.float64)  # what each beam says is free (inf: as far as it knows)
     padded = np.pad(near, NEIGHBOURS, constant_values=np.inf)
     bound = np.min([padded[NEIGHBOURS + d:NEIGHBOURS + d + r.size] for d in range(-NEIGHBOURS, NEIGHBOURS + 1)

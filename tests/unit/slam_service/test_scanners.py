@@ -37,7 +37,7 @@ def test_points_land_on_the_walls_and_the_sentinel_is_no_return(fov: float, step
     r[~hit] = rmax  # the driver reports "nothing within range" as range_max
     r[::37] = np.nan  # glass
     r[5::41] = np.inf  # another driver's no-return
-    prep = prepare_scan(scan, max_range=rmax, clear_range=3.0)
+    prep = prepare_scan(scan, max_range=rmax)
     assert prep.n_nan == np.count_nonzero(np.isnan(r))
     assert prep.n_no_return == np.count_nonzero((r >= rmax) | np.isposinf(r))
     usable = np.isfinite(r) & (r < rmax)
@@ -49,8 +49,7 @@ def test_points_land_on_the_walls_and_the_sentinel_is_no_return(fov: float, step
     got = transform_points(pose, prep.points.astype(np.float64))
     assert np.abs(got - expect).max() < 1e-3
     assert np.allclose(prep.origin, MOUNT[:2])
-    assert prep.free_ends is not None
-    reach = np.hypot(*(prep.free_ends - np.asarray(MOUNT[:2])).T)
+    reach = np.hypot(*(prep.free_ends(3.0) - np.asarray(MOUNT[:2])).T)
     assert len(reach) <= prep.n_no_return
     assert np.all(reach <= 3.0 + 1e-5)
 
