@@ -23,9 +23,11 @@ from robonix_common.scan import Scan
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
+from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
 from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
-from .preprocess import ScanError, prepare_scan
+from .preprocess import PreparedScan, ScanError, prepare_scan
+from .reorder import ReorderBuffer
 from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
 
@@ -56,6 +58,8 @@ class SlamEngine:
         self._path: list[float] = []
         self._points: list[NDArray[np.float32]] = []
         self._origins: list[NDArray[np.float64]] = []
+        self._free: dict[int, NDArray[np.float32]] = {}  # node -> base-frame ends of its no-return beams (capped)
+        self._prep: PreparedScan | None = None  # the scan being processed
         self._rendered: list[NDArray[np.float64]] = []  # pose each node's scan is in the grid at
         self._pending: list[int] = []  # nodes moved by an optimisation, awaiting re-render (next first)
         self.grid = LogOddsGrid(c.resolution, hit=c.log_odds_hit, miss=c.log_odds_miss, lo=c.log_odds_min,
@@ -74,6 +78,15 @@ class SlamEngine:
         self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
+        self._reorder: ReorderBuffer[tuple[Scan, PoseArray]] = ReorderBuffer(c.reorder_window_s,
+                                                                             c.reorder_adaptive)
+        self._dup_warned = False
+        self._step = StepWindows(c.search_window_xy, c.search_window_theta, False)  # this scan's windows
+        self._step_motion = (0.0, 0.0, 0.0)  # (dist, rot, gap) of this scan's odometry since the last node
+        self._glitch_seed: PoseArray | None = None  # "odometry glitched" seed of a suspect step
+        self._drift = 0.0  # m, position std dev accrued since the last loop closure (loop candidate radius)
+        self._reorder_newest = -math.inf  # newest stamp offered so far
+        self._loc_ref_odom: PoseArray | None = None  # odometry at the last localization match
 
     @property
     def mode(self) -> Mode:
@@ -83,10 +96,10 @@ class SlamEngine:
         """Switch mapping <-> localization; localization uses the loaded map or the current one."""
         if mode not in ("mapping", "localization"):
             raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
+        self.flush()  # scans held for reordering belong to the old mode; the map catches up with the poses
         if mode == "localization" and self._fixed_lookup is None:
             if self.graph.n_nodes == 0:
                 raise ValueError("localization needs a map: load one or map first")
-            self.flush()
             self._set_fixed_map(self.map())
         self._mode = mode
         self._last_match_pose = None
@@ -163,7 +176,7 @@ class SlamEngine:
 
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
-        m = required_margin(max(c.search_window_xy, c.loop_search_window_xy),
+        m = required_margin(max(c.search_window_xy, c.max_search_window_xy, c.loop_search_window_xy),
                             max(c.coarse_factor, c.loop_coarse_factor), c.smear_sigma, grid.resolution)
         pad = int(math.ceil(m / grid.resolution))
         mask = np.pad(grid.data >= 65, pad)
@@ -193,8 +206,10 @@ class SlamEngine:
                       dataclasses.replace(self.stats))
 
     def process(self, scan: Scan, odom_pose: object, stamp: float | None = None) -> Update:
-        """Integrate one scan taken at odometry pose ``odom_pose`` (odom frame). Never raises on bad input."""
-        c = self.config
+        """Integrate one scan taken at odometry pose ``odom_pose`` (odom frame). Never raises on bad input.
+
+        Scans pass a short reorder buffer (``reorder_window_s``): the returned update is that of the last
+        scan released in stamp order (a held scan returns a non-integrated update); :meth:`flush` drains it."""
         self.stats.scans_received += 1
         try:
             odom = as_pose(odom_pose, "odom_pose")
@@ -205,8 +220,36 @@ class SlamEngine:
         t = float(scan.stamp if stamp is None else stamp)
         if not math.isfinite(t):
             return self._skip(f"stamp is not finite: {t}", "scans_skipped_invalid")
-        if self._last_stamp is not None and t < self._last_stamp:
-            return self._skip(f"stamp {t} older than previous {self._last_stamp}", "scans_skipped_time")
+        verdict, due = self._reorder.push(t, (scan, odom), hash(scan.ranges.tobytes()))
+        if verdict == "duplicate":
+            self.stats.scans_duplicate += 1
+            if not self._dup_warned:  # one warning; the counter tells the rest
+                self._dup_warned = True
+                log.warning("slam: skipping exact duplicate scans (stamp %s; counted in scans_duplicate)", t)
+            return self._update(False, False, skipped="duplicate scan")
+        if verdict == "late":
+            return self._skip(f"stamp {t} older than the reorder window allows", "scans_skipped_time")
+        if t < self._reorder_newest:  # accepted although a newer scan came first: sorted into place
+            self.stats.scans_reordered += 1
+        self._reorder_newest = max(self._reorder_newest, t)
+        return self._run(due)
+
+    def flush(self) -> Update:
+        """End of input (the end of a log, before a save, a mode switch or scoring a map): process every scan
+        the reorder buffer still holds, then re-draw every node still waiting for its share of the re-render
+        budget, so ``map()`` matches ``trajectory()``."""
+        upd = self._run(self._reorder.flush())
+        self._render_pending(len(self._pending))
+        return upd
+
+    def _run(self, due: list[tuple[float, tuple[Scan, PoseArray]]]) -> Update:
+        upd = None
+        for t, (scan, odom) in due:
+            upd = self._process_one(scan, odom, t)
+        return upd if upd is not None else self._update(False, False)
+
+    def _process_one(self, scan: Scan, odom: PoseArray, t: float) -> Update:
+        c = self.config
         try:
             prep = prepare_scan(scan, c.max_range)
         except ScanError as exc:
@@ -214,36 +257,67 @@ class SlamEngine:
         self.stats.beams_nan += prep.n_nan
         self.stats.beams_inf += prep.n_inf
         self.stats.beams_out_of_range += prep.n_out_of_range
+        self.stats.beams_no_return += prep.n_no_return
         if len(prep.points) < c.min_valid_beams:
             return self._skip(f"only {len(prep.points)} usable beams of {scan.ranges.size}", "scans_skipped_invalid")
+        gap = t - self._last_stamp if self._last_stamp is not None else 0.0
         self._last_stamp = t
-
+        self._glitch_seed = None
         if self._initial_pose is not None:  # (re)start: anchor map->odom so the robot is at the given pose
             self._map_to_odom = compose(self._initial_pose, inverse(odom))
             self._initial_pose = None
         elif self._last_odom is not None:
             d = relative(self._last_odom, odom)
-            if math.hypot(d[0], d[1]) > c.max_odom_jump_distance or abs(d[2]) > c.max_odom_jump_heading:
-                # keep the map pose; re-anchor odometry so the jump does not teleport the robot
+            dist = math.hypot(d[0], d[1])
+            if c.drop_odom_jumps and legacy_jump(c, dist, d[2]):
+                # old behaviour (comparisons only): keep the map pose, re-anchor odometry, lose the motion
                 self._map_to_odom = compose(self._pose, inverse(odom))
                 self._last_odom = odom
-                return self._skip(f"odometry jump of {math.hypot(d[0], d[1]):.2f} m / {d[2]:.2f} rad", "odom_jumps")
+                return self._skip(f"odometry jump of {dist:.2f} m / {d[2]:.2f} rad", "odom_jumps")
+            if not c.drop_odom_jumps and suspect_step(c, dist, d[2], gap):
+                self.stats.odom_jumps += 1
+                self._glitch_seed = compose(self._map_to_odom, self._last_odom)  # where the robot was
         self._last_odom = odom
         predicted = compose(self._map_to_odom, odom)
         self._pose = predicted
+        self._set_step(odom, gap)
         if self._mode == "localization":
             return self._localize(prep.points, predicted, odom)
+        self._prep = prep  # its no-return clearing is computed only if it becomes a node
         return self._map_step(prep.points, prep.origin, predicted, odom, t)
+
+    def _set_step(self, odom: PoseArray, gap: float) -> None:
+        """This scan's search windows from its odometry motion since the last node (or localization match)
+        and the data gap before it."""
+        c = self.config
+        ref = self._ref_odom()
+        if ref is None or c.drop_odom_jumps:
+            self._step = StepWindows(c.search_window_xy, c.search_window_theta, False)
+            self._step_motion = (0.0, 0.0, gap)
+            return
+        d = relative(ref, odom)
+        dist = math.hypot(d[0], d[1])
+        self._step_motion = (dist, abs(float(d[2])), gap)
+        self._step = search_windows(c, dist, float(d[2]), gap)
+
+    def _ref_odom(self) -> PoseArray | None:
+        if self._mode == "localization":
+            return self._loc_ref_odom
+        if self._resume_from is not None or not self._odom:
+            return None
+        return self._odom[-1]
 
     def _moved(self, ref: PoseArray, pose: PoseArray) -> bool:
         d = relative(ref, pose)
         return math.hypot(d[0], d[1]) >= self.config.min_travel_distance or abs(d[2]) >= self.config.min_travel_heading
 
-    def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False) -> MatchResult:
+    def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False,
+               step: StepWindows | None = None) -> MatchResult:
         c = self.config
+        step = step or self._step
         return match_scan(lookup, points, seed,
-                          window_xy=c.loop_search_window_xy if loop else c.search_window_xy,
-                          window_theta=c.loop_search_window_theta if loop else c.search_window_theta,
+                          window_xy=c.loop_search_window_xy if loop else step.xy,
+                          window_theta=c.loop_search_window_theta if loop else step.theta,
                           angular_step=c.angular_step, coarse_factor=c.loop_coarse_factor if loop else c.coarse_factor,
                           refine=c.refine, sigma=c.smear_sigma, penalty=0.0 if loop else c.match_penalty)
 
@@ -253,11 +327,15 @@ class SlamEngine:
         if self._last_match_pose is not None and not self._moved(self._last_match_pose, predicted):
             self.stats.scans_gated += 1
             return self._update(False, False)
-        m = self._match(self._fixed_lookup, points, predicted)
+        m = self._seq_match(self._fixed_lookup, points, predicted)
         self._last_match_pose = predicted
         if m.response < self.config.min_response:
             self.stats.match_failures += 1
+            if self._glitch_seed is not None:  # suspect step, no match either way: do not follow the glitch
+                self._pose = self._glitch_seed
+                self._map_to_odom = compose(self._glitch_seed, inverse(odom))
             return self._update(False, False, response=m.response)
+        self._loc_ref_odom = odom
         self._pose = m.pose
         self._map_to_odom = compose(m.pose, inverse(odom))
         self._last_match_pose = m.pose
@@ -271,21 +349,10 @@ class SlamEngine:
         if n and self._resume_from is None and not self._moved(self.graph.poses[-1], predicted):
             self.stats.scans_gated += 1
             return self._update(False, self._render_pending() > 0)
-        response = float("nan")
         if n == 0:
-            pose, cov, kind = predicted, None, EDGE_ODOM
+            pose, cov, kind, response = predicted, None, EDGE_ODOM, float("nan")
         else:
-            if (self._running is None or self._resume_from is not None
-                    or n - self._running_built_at >= c.lookup_rebuild_nodes):
-                self._running = self._build_running(predicted, points)
-                self._running_built_at = n
-            m = self._match(self._running, points, predicted)
-            response = m.response
-            if m.response >= c.min_response:
-                pose, cov, kind = m.pose, m.covariance, EDGE_SEQUENTIAL
-            else:
-                self.stats.match_failures += 1
-                pose, cov, kind = predicted, None, EDGE_ODOM
+            pose, cov, kind, response = self._match_step(points, predicted, n)
         k = self.graph.add_node(pose)
         if n:
             ref = self.graph.poses[prev]
@@ -296,11 +363,19 @@ class SlamEngine:
                 info = _info_in_frame(cov, ref[2])
             self.graph.add_edge(prev, k, z, info, kind)
         dist = 0.0 if n == 0 else float(np.hypot(*(pose[:2] - self.graph.poses[prev][:2])))
+        if n and kind == EDGE_ODOM:  # unmatched: its whole uncertainty adds to the drift
+            self._drift += math.sqrt(cov[0, 0]) if cov is not None else c.odom_sigma_xy
+        else:
+            self._drift += c.loop_drift_per_m * dist
         self._path.append((self._path[prev] if n else 0.0) + dist)
         self._odom.append(odom)
         self._stamps.append(t)
         self._points.append(np.asarray(points, dtype=np.float32))
         self._origins.append(np.asarray(origin, dtype=float))
+        if self._prep is not None:
+            ends = self._prep.free_ends(c.no_return_clear_range)
+            if len(ends):
+                self._free[k] = ends
         self._resume_from = None
         self._render_node(k, pose)
         self._pose = pose.copy()
@@ -308,10 +383,69 @@ class SlamEngine:
         loop = False
         if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
             loop = self._try_loop_closure(k)
+            if loop:
+                self._drift = 0.0
         if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
             self._render_pending()
         self.stats.scans_integrated += 1
         return self._update(True, True, response=response, loop=loop)
+
+    def _match_step(self, points: NDArray, predicted: PoseArray,
+                    n: int) -> tuple[PoseArray, NDArray | None, int, float]:
+        """Match a scan that passed gating against the running submap (or, after an unusual step, a one-off
+        wide lookup): the new node's pose, its covariance (None: odometry's), the edge kind and the response.
+        An unusual step that cannot be matched is never dropped: it keeps its odometry (or, for a glitch,
+        "did not move") with a large covariance."""
+        c = self.config
+        unusual = self._step.wide or self._glitch_seed is not None
+        if unusual:  # a one-off lookup big enough for the widened windows and both seeds
+            lookup = self._build_wide(predicted, points)
+            self._running = None
+        else:
+            if (self._running is None or self._resume_from is not None
+                    or n - self._running_built_at >= c.lookup_rebuild_nodes):
+                self._running = self._build_running(predicted, points)
+                self._running_built_at = n
+            lookup = self._running
+        m = self._seq_match(lookup, points, predicted)
+        if m.response >= c.min_response:
+            return m.pose, m.covariance, EDGE_SEQUENTIAL, m.response
+        self.stats.match_failures += 1
+        if not unusual:
+            return predicted, None, EDGE_ODOM, m.response
+        self.stats.unmatched_steps += 1
+        pose = self._glitch_seed if self._glitch_seed is not None else predicted
+        sxy, sth = unmatched_sigmas(c, *self._step_motion)
+        return pose, np.diag([sxy**2, sxy**2, sth**2]), EDGE_ODOM, m.response
+
+    def _seq_match(self, lookup: LookupGrid, points: NDArray, predicted: PoseArray) -> MatchResult:
+        """Sequential match at the odometry prediction with this scan's (possibly widened) windows; for a
+        suspect step also at "the robot did not move" (normal windows): the better response wins."""
+        if self._step.wide:
+            self.stats.wide_searches += 1
+        m = self._match(lookup, points, predicted)
+        if self._glitch_seed is not None:
+            c = self.config
+            alt = self._match(lookup, points, self._glitch_seed,
+                              step=StepWindows(c.search_window_xy, c.search_window_theta, False))
+            if alt.response > m.response:
+                self.stats.odom_glitches += 1
+                return alt
+        return m
+
+    def _build_wide(self, predicted: PoseArray, points: NDArray) -> LookupGrid:
+        """Running-submap lookup for a wide or suspect step: centred on the robot, covering every heading
+        and both seeds, with the margin the widened window needs."""
+        c = self.config
+        n = self.graph.n_nodes
+        nodes = range(max(0, n - c.running_buffer_size), n)
+        margin = required_margin(self._step.xy, c.coarse_factor, c.smear_sigma, c.resolution)
+        seeds = [predicted[:2]] + ([self._glitch_seed[:2]] if self._glitch_seed is not None else [])
+        centre = np.mean(seeds, axis=0)
+        spread = max(float(np.hypot(*(p - centre))) for p in seeds)
+        reach = float(np.max(np.hypot(points[:, 0], points[:, 1])))
+        return LookupGrid.from_points(self._node_points_map(nodes), c.resolution, c.smear_sigma, margin,
+                                      center=centre, half_extent=reach + spread + self._step.xy + 0.3)
 
     def _node_points_map(self, nodes: NDArray | list[int]) -> NDArray:
         poses = self.graph.poses
@@ -345,10 +479,11 @@ class SlamEngine:
         if len(old) == 0:
             return False
         d = np.hypot(*(poses[old, :2] - poses[k, :2]).T)
-        near = old[d <= c.loop_search_radius]
+        radius = loop_radius(c, self._drift)
+        near = old[d <= radius]
         if len(near) == 0:
             return False
-        cand = int(near[np.argmin(d[d <= c.loop_search_radius])])
+        cand = int(near[np.argmin(d[d <= radius])])
         sub = old[np.hypot(*(poses[old, :2] - poses[cand, :2]).T) <= c.loop_submap_radius]
         key = (tuple(int(i) for i in sub), self.stats.optimizations)
         if self._loop_lookup is None or self._loop_lookup[0] != key:
@@ -473,16 +608,12 @@ class SlamEngine:
         if self.graph.n_edges == 0:
             return None
         self._optimize()
-        self.flush()
+        self._render_pending(len(self._pending))
         return self.last_optimize
-
-    def flush(self) -> int:
-        """Re-render every node still waiting after an optimisation, so ``map()`` matches ``trajectory()``
-        (after the last scan, before saving or scoring a map). Returns how many nodes were drawn."""
-        return self._render_pending(len(self._pending))
 
     def _render_node(self, k: int, pose: NDArray) -> None:
         org, pts = self._origins[k], self._points[k]
+        old = None
         if k < len(self._rendered):
             old = self._rendered[k]
             self.grid.integrate(transform_points(old, org[None])[0], transform_points(old, pts), weight=-1.0)
@@ -490,7 +621,16 @@ class SlamEngine:
         else:
             self._rendered.append(pose.copy())
         self.grid.integrate(transform_points(pose, org[None])[0], transform_points(pose, pts))
+        if k in self._free:  # no-return beams clear free space; moved with the scan like its hits
+            if old is not None:
+                self._clear_free(k, old, -1.0)
+            self._clear_free(k, pose, 1.0)
         self._map_cache = None
+
+    def _clear_free(self, k: int, pose: NDArray, weight: float) -> None:
+        org = transform_points(pose, self._origins[k][None])[0]
+        self.grid.integrate_free(org, transform_points(pose, self._free[k]), transform_points(pose, self._points[k]),
+                                 weight=weight)
 
     def _rerender(self) -> int:
         """Render every node from scratch at its current pose (after a session load). Returns how many."""

@@ -112,6 +112,37 @@ class LogOddsGrid:
         upd[hits] = hit
         sub += upd.reshape(bh, bw)
 
+    def integrate_free(self, origin: NDArray, ends: NDArray, hits: NDArray, weight: float = 1.0) -> None:
+        """Clear along no-return beams: one miss on each cell from ``origin`` to ``ends`` (the beam capped at
+        a clearing range), never a hit, and no miss on a cell the same scan's ``hits`` occupy. A boolean mask
+        over the beams' bounding box marks each cell once (no sort: this runs for every moved node)."""
+        e = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
+        if len(e) == 0:
+            return
+        o = np.asarray(origin, dtype=np.float64)
+        res = self.resolution
+        vec = e - o
+        length = np.hypot(vec[:, 0], vec[:, 1])
+        ns = np.floor(length / (0.5 * res)).astype(np.int64) + 1
+        beam = np.repeat(np.arange(len(e)), ns)
+        t = (np.arange(int(ns.sum())) - np.repeat(np.cumsum(ns) - ns, ns)) * (0.5 * res)
+        unit = vec / np.maximum(length, 1e-9)[:, None]
+        fc = np.floor((o[0] + unit[beam, 0] * t) / res).astype(np.int64)
+        fr = np.floor((o[1] + unit[beam, 1] * t) / res).astype(np.int64)
+        cmin, cmax, rmin, rmax = int(fc.min()), int(fc.max()), int(fr.min()), int(fr.max())
+        self._ensure(cmin, rmin, cmax, rmax)
+        bw, bh = cmax - cmin + 1, rmax - rmin + 1
+        free = np.zeros(bw * bh, dtype=bool)
+        free[(fr - rmin) * bw + (fc - cmin)] = True
+        h = np.asarray(hits, dtype=np.float64).reshape(-1, 2)
+        if len(h):
+            hc = np.floor(h[:, 0] / res).astype(np.int64) - cmin
+            hr = np.floor(h[:, 1] / res).astype(np.int64) - rmin
+            inside = (hc >= 0) & (hc < bw) & (hr >= 0) & (hr < bh)
+            free[hr[inside] * bw + hc[inside]] = False
+        sub = self.logodds[rmin - self.r0:rmax - self.r0 + 1, cmin - self.c0:cmax - self.c0 + 1]
+        sub += (free.astype(np.float32) * np.float32(self.miss * weight)).reshape(bh, bw)
+
     def to_gridmap(self, frame_id: str = "map") -> GridMap:
         """Trinary export: -1 unknown, 0 free, 100 occupied (thresholds on log-odds)."""
         lo = self.logodds

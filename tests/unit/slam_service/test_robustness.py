@@ -33,7 +33,9 @@ def test_nan_inf_beams_are_dropped_and_counted(rec) -> None:
     assert u.integrated
     assert eng.stats.beams_nan == np.count_nonzero(np.isnan(r))
     assert eng.stats.beams_inf == np.count_nonzero(np.isinf(r))
-    assert eng.stats.beams_out_of_range == np.count_nonzero((r == 50.0) | (r == np.float32(0.01)))
+    assert eng.stats.beams_out_of_range == np.count_nonzero(r == np.float32(0.01))
+    # beyond range_max is the no-return sentinel, like +inf: not an obstacle, counted separately
+    assert eng.stats.beams_no_return == np.count_nonzero((r == 50.0) | np.isposinf(r))
 
 
 @pytest.mark.parametrize("ranges", [np.zeros(0), np.full(360, np.nan), np.full(360, np.inf), np.full(360, 0.0),
@@ -75,7 +77,9 @@ def test_not_a_scan_and_time_going_backwards(rec) -> None:
     assert eng.stats.scans_skipped_time == 1
 
 
-def test_odom_jump_is_skipped_and_pose_stays_continuous(rec) -> None:
+def test_odom_reset_is_matched_not_followed_and_pose_stays_continuous(rec) -> None:
+    """An odometry frame jump between two scans is faster than the robot can move: the scan is matched at
+    'the robot did not move' too, that seed wins, and map->odom absorbs the jump (nothing dropped)."""
     eng = SlamEngine()
     jump = np.array([5.0, -3.0, 1.5])  # the odom frame moves, e.g. an odometry reset
     errs = []
@@ -83,11 +87,21 @@ def test_odom_jump_is_skipped_and_pose_stays_continuous(rec) -> None:
         odom = compose(jump, o) if k >= 100 else o
         u = eng.process(s, odom)
         if k == 100:
-            assert u.skipped_reason.startswith("odometry jump")
-            assert not u.integrated
+            assert not u.skipped_reason
         errs.append(np.hypot(*(u.pose_map[:2] - rec.gt[k][:2])))
     assert eng.stats.odom_jumps == 1
-    assert max(errs[101:]) < 0.1  # tracking continues in the map frame after re-anchoring
+    assert eng.stats.odom_glitches == 1
+    assert max(errs[100:]) < 0.1  # tracking continues in the map frame
+
+
+def test_legacy_drop_flag_restores_the_old_jump_guard(rec) -> None:
+    eng = SlamEngine(SlamConfig(drop_odom_jumps=True))
+    jump = np.array([5.0, -3.0, 1.5])
+    for k, (s, o) in enumerate(zip(rec.scans[:120], rec.odom[:120], strict=True)):
+        u = eng.process(s, compose(jump, o) if k >= 100 else o)
+        if k == 100:
+            assert u.skipped_reason.startswith("odometry jump")
+    assert eng.stats.odom_jumps == 1
 
 
 def test_config_validation_names_the_field() -> None:
