@@ -5,25 +5,12 @@ imported (robot and scene files are :mod:`hal_panda_mobile.files`' job). Its mod
 from __future__ import annotations
 
 import ast
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
+from support import purity
+
 import hal_panda_mobile.sim
-
-BLOCKER = textwrap.dedent('''
-    import sys
-    BLOCKED = {"grpc", "cyclonedds", "mcp", "yaml", "pydantic", "PIL"}
-
-    class Blocker:
-        def find_spec(self, name, path=None, target=None):
-            if name.partition(".")[0] in BLOCKED:
-                raise ImportError(f"{name} is blocked in this purity check")
-            return None
-
-    sys.meta_path.insert(0, Blocker())
-''')
 
 SIM = textwrap.dedent('''
     import importlib, math, pkgutil
@@ -52,7 +39,7 @@ SIM = textwrap.dedent('''
 
 
 def test_sim_imports_and_steps_without_middleware_or_file_formats() -> None:
-    proc = subprocess.run([sys.executable, "-c", BLOCKER + SIM], capture_output=True, text=True, timeout=300)
+    proc = purity.run_blocked(SIM)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert int(proc.stdout.split()[1]) >= 10  # engine, errors, lidar, mjcf, odometry, raster, robot, scene, ...
 

@@ -2,26 +2,12 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-from pathlib import Path
+from support import purity
 
-ROOT = Path(__file__).resolve().parents[3]
-BLOCKED = ("grpc", "cyclonedds", "mcp", "yaml", "pydantic", "robonix_api", "robonix_nav_data")
+BLOCKED = (*purity.MIDDLEWARE_AND_FORMATS, "robonix_api", "robonix_nav_data")
 
-PROBE = f"""
-import importlib, pkgutil, sys
-
-BLOCKED = {BLOCKED!r}
-
-class Block:
-    def find_spec(self, name, path=None, target=None):
-        if name.split(".")[0] in BLOCKED:
-            raise ImportError(f"{{name}} is blocked in this test")
-        return None
-
-sys.meta_path.insert(0, Block())
+PROBE = """
+import importlib, pkgutil
 import nav2_wrapper.core as core
 mods = sorted(m.name for m in pkgutil.iter_modules(core.__path__, "nav2_wrapper.core."))
 for name in mods:
@@ -43,9 +29,7 @@ print("OK", len(mods), round(res.length, 2), leaked)
 
 
 def test_core_imports_and_plans_without_middleware_or_file_formats() -> None:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    out = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True, timeout=300, env=env,
-                         cwd=ROOT, check=False)
+    out = purity.run_blocked(PROBE, BLOCKED)
     assert out.returncode == 0, out.stderr[-3000:]
     words = out.stdout.split()
     assert words[0] == "OK", out.stdout
@@ -56,8 +40,6 @@ def test_core_imports_and_plans_without_middleware_or_file_formats() -> None:
 
 def test_blocker_really_blocks() -> None:
     """The probe's finder makes a blocked package unimportable (so a pass above means something)."""
-    probe = PROBE.split("import nav2_wrapper.core as core")[0] + "import yaml\n"
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT,
-                         env={**os.environ, "PYTHONPATH": str(ROOT)}, check=False)
+    out = purity.run_blocked("import yaml\n", BLOCKED, timeout=60)
     assert out.returncode != 0
     assert "yaml is blocked" in out.stderr

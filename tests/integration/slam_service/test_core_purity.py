@@ -4,22 +4,9 @@ be imported at all. A fresh interpreter, so nothing this test run already import
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import textwrap
 
-BLOCKER = textwrap.dedent('''
-    import sys
-    BLOCKED = {"grpc", "cyclonedds", "mcp", "yaml", "pydantic", "PIL"}
-
-    class Blocker:
-        def find_spec(self, name, path=None, target=None):
-            if name.partition(".")[0] in BLOCKED:
-                raise ImportError(f"{name} is blocked in this purity check")
-            return None
-
-    sys.meta_path.insert(0, Blocker())
-''')
+from support import purity
 
 SLAM = textwrap.dedent('''
     import importlib, math, pkgutil
@@ -50,8 +37,8 @@ SLAM = textwrap.dedent('''
 
 
 def run_blocked(body: str) -> str:
-    """Run ``body`` after installing the import blocker; its stdout, or the failure with its stderr."""
-    proc = subprocess.run([sys.executable, "-c", BLOCKER + body], capture_output=True, text=True, timeout=300)
+    """Run ``body`` with the middleware and file-format stacks blocked; its stdout, or the failure's stderr."""
+    proc = purity.run_blocked(body)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return proc.stdout
 
