@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from robonix_api.procs import stop_process
+
 pytestmark = [pytest.mark.integration, pytest.mark.container, pytest.mark.timeout(1500)]
 REPO = Path(__file__).resolve().parents[4]
 ENGINE = os.environ.get("ROBONIX_CONTAINER_ENGINE", "podman")
@@ -114,10 +116,4 @@ def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> No
         left = _engine("ps", "-a", "--format", "{{.Names}}", timeout=60).stdout
         assert "robonix-nav2-nav2-sim-navigation-" not in left, left
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(30)
+        stop_process(proc, 60.0, kill_timeout=30.0, first=signal.SIGINT)   # Ctrl-C is rbnx boot's clean stop

@@ -18,7 +18,7 @@ import pytest
 from support.e2e import SIM_DEPLOY, e2e_env, navigate, rbnx_cmd, recorded_pids, wait_until
 
 from robonix_api.atlas_client import AtlasClient
-from robonix_api.procs import pid_alive
+from robonix_api.procs import pid_alive, stop_process
 from robonix_api.types import LifecycleState
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
@@ -68,13 +68,7 @@ def test_boot_sim_deploy_navigate_one_goal_and_sigint_leaves_nothing(tmp_path: P
             assert "Traceback" not in log, f"{name}.log:\n{log[-3000:]}"
         print(f"boot + goal + shutdown in {time.monotonic() - t0:.1f}s")
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(30)
+        stop_process(proc, 60.0, kill_timeout=30.0, first=signal.SIGINT)   # Ctrl-C is rbnx boot's clean stop
 
 
 def _run_demo(tmp_path: Path, *args: str, timeout: float = 240) -> subprocess.CompletedProcess[str]:
