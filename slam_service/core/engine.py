@@ -150,6 +150,8 @@ class SlamEngine:
             self._path = [float(d) for d in session.path_dist]
             self._points = list(session.points)
             self._origins = [np.asarray(o, dtype=float) for o in session.origins]
+            self._free = {int(k): np.asarray(v, dtype=np.float32).reshape(-1, 2) for k, v in session.free.items()
+                          if 0 <= int(k) < self.graph.n_nodes and len(v)}
             self._rerender()
             if self.graph.n_nodes:
                 self._resume_from = self.graph.n_nodes - 1
@@ -172,7 +174,7 @@ class SlamEngine:
                                     edge_info=list(g.edge_info), edge_kind=list(g.edge_kind))
         return SessionData(graph, np.asarray(self._odom).reshape(-1, 3), np.asarray(self._stamps, dtype=float),
                            np.asarray(self._path, dtype=float), list(self._points),
-                           np.asarray(self._origins).reshape(-1, 2), self.config)
+                           np.asarray(self._origins).reshape(-1, 2), self.config, dict(self._free))
 
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
