@@ -380,7 +380,7 @@ class SlamLoop:
             mode = self.engine.mode
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
                 "process_ms_max": round(self.process_ms_max, 1), "queue_size": self._queue.size,
-                "queue_high_water": self._queue.high_water, "engine": engine}
+                "queue_depth": len(self._queue), "queue_high_water": self._queue.high_water, "engine": engine}
 
     def close(self, reason: str = "") -> None:
         self._stop.set()
