@@ -45,7 +45,7 @@ from robonix_api.dds.tf import make_transform
 from robonix_api.upstream import Binding
 from robonix_eval.slam_loop import SETTINGS, LoopRecording, record_loop
 from slam_service.config import parse_config
-from slam_service.core import SlamEngine, ate_rmse
+from slam_service.core import SlamEngine, ate_rmse, kernels
 from slam_service.core.numeric import load_in_background
 from slam_service.loop import ScanTiming, SlamLoop
 from slam_service.provider import ROLES
@@ -107,7 +107,7 @@ def replay(rec: LoopRecording, rate_hz: float, max_scans: int) -> dict[str, Any]
     try:
         time.sleep(1.0)  # discovery between the two participants (the HAL is up long before SLAM activates)
         loop.set_integrating(True)
-        period, late, drops_at = 1.0 / rate_hz, 0.0, []
+        period, late, drops_at, kernels_at = 1.0 / rate_hz, 0.0, [], -1
         t0 = time.monotonic()
         for k in range(n):
             wait = t0 + k * period - time.monotonic()
@@ -116,6 +116,8 @@ def replay(rec: LoopRecording, rate_hz: float, max_scans: int) -> dict[str, Any]
             else:
                 late = max(late, -wait)
             hal.send(rec, k)
+            if kernels_at < 0 and kernels.ready():  # numba loads in the background after the first /map
+                kernels_at = k
             if loop.counters["scans_dropped_behind"] > len(drops_at):  # when (which scan sent) drops happened
                 drops_at.extend([k] * (loop.counters["scans_dropped_behind"] - len(drops_at)))
         wall = time.monotonic() - t0
@@ -144,11 +146,12 @@ def replay(rec: LoopRecording, rate_hz: float, max_scans: int) -> dict[str, Any]
         "wall_s": wall, "sender_max_late_ms": 1e3 * late,
         "received": stats.get("scans_received", 0), "processed": stats.get("scans_processed", 0),
         "dropped": stats.get("scans_dropped_behind", 0), "dropped_while_sending_scan": drops_at,
-        "queue_size": stats["queue_size"],
+        "kernels_ready_at_scan": kernels_at, "queue_size": stats["queue_size"],
         "queue_high_water": stats["queue_high_water"],
         "skipped": {k: stats[k] for k in SKIPS if stats.get(k)},
         "latency": pct([t.latency_s for t in timings]), "queue_wait": pct([t.wait_s for t in timings]),
         "process": pct([t.process_s for t in timings]),
+        "first_scans_latency_ms": [round(1e3 * t.latency_s, 1) for t in timings[:60]],  # the boot transient
         "over_100ms": sum(t.latency_s > 0.1 for t in timings), "over_250ms": sum(t.latency_s > 0.25 for t in timings),
         "loop_closures": lcs, "nodes": len(traj),
         "ate_m": ate_rmse(traj, rec.gt[idx]) if len(traj) else float("nan"),
@@ -181,6 +184,7 @@ def main() -> None:
               f" (> 100 ms: {r['over_100ms']}, > 250 ms: {r['over_250ms']}); process() p50 {pro['p50_ms']:.1f} / "
               f"p99 {pro['p99_ms']:.1f} / max {pro['max_ms']:.0f} ms; queue wait max {wq['max_ms']:.0f} ms")
         print(f"  loop closures {r['loop_closures']}, {r['nodes']} nodes, ATE {100 * r['ate_m']:.2f} cm; "
+              f"numba kernels ready at scan {r['kernels_ready_at_scan']}; "
               f"sender late by <= {r['sender_max_late_ms']:.0f} ms; load average {r['loadavg_1min'][0]:.1f} -> "
               f"{r['loadavg_1min'][1]:.1f} on {os.cpu_count()} CPUs", flush=True)
     out = Path(args.out)
