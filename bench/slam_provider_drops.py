@@ -151,6 +151,7 @@ def replay(rec: LoopRecording, rate_hz: float, max_scans: int) -> dict[str, Any]
         "skipped": {k: stats[k] for k in SKIPS if stats.get(k)},
         "latency": pct([t.latency_s for t in timings]), "queue_wait": pct([t.wait_s for t in timings]),
         "process": pct([t.process_s for t in timings]),
+        "process_cpu": pct([t.process_cpu_s for t in timings]),
         "first_scans_latency_ms": [round(1e3 * t.latency_s, 1) for t in timings[:60]],  # the boot transient
         "over_100ms": sum(t.latency_s > 0.1 for t in timings), "over_250ms": sum(t.latency_s > 0.25 for t in timings),
         "loop_closures": lcs, "nodes": len(traj),
@@ -176,13 +177,14 @@ def main() -> None:
               f"sim) in {time.monotonic() - t:.0f} s; replaying at {args.rate:g} Hz ...", flush=True)
         r = replay(rec, args.rate, args.max_scans)
         rows.append(r)
-        lat, pro, wq = r["latency"], r["process"], r["queue_wait"]
+        lat, pro, wq, cpu = r["latency"], r["process"], r["queue_wait"], r["process_cpu"]
         print(f"  sent {r['sent']}, received {r['received']}, processed {r['processed']}, DROPPED {r['dropped']} "
               f"(queue {r['queue_size']}, high-water {r['queue_high_water']}), skipped {r['skipped'] or 0}"
               + (f"; drops while sending scans {r['dropped_while_sending_scan'][:10]}" if r["dropped"] else ""))
         print(f"  latency arrival->pose p50 {lat['p50_ms']:.1f} / p99 {lat['p99_ms']:.1f} / max {lat['max_ms']:.0f} ms"
               f" (> 100 ms: {r['over_100ms']}, > 250 ms: {r['over_250ms']}); process() p50 {pro['p50_ms']:.1f} / "
-              f"p99 {pro['p99_ms']:.1f} / max {pro['max_ms']:.0f} ms; queue wait max {wq['max_ms']:.0f} ms")
+              f"p99 {pro['p99_ms']:.1f} / max {pro['max_ms']:.0f} ms (CPU time p50 {cpu['p50_ms']:.1f} / p99 "
+              f"{cpu['p99_ms']:.1f} / max {cpu['max_ms']:.0f} ms); queue wait max {wq['max_ms']:.0f} ms")
         print(f"  loop closures {r['loop_closures']}, {r['nodes']} nodes, ATE {100 * r['ate_m']:.2f} cm; "
               f"numba kernels ready at scan {r['kernels_ready_at_scan']}; "
               f"sender late by <= {r['sender_max_late_ms']:.0f} ms; load average {r['loadavg_1min'][0]:.1f} -> "

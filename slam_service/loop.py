@@ -85,6 +85,7 @@ class ScanTiming:
 
     wait_s: float  # from the DDS callback queueing it to the worker taking it
     process_s: float  # SlamEngine.process alone
+    process_cpu_s: float  # its CPU time on the worker thread: what it costs without neighbours competing
     handle_s: float  # the worker's whole handling: TF/odometry lookup + process + map->odom out
     integrated: bool
     loop_closed: bool
@@ -188,8 +189,8 @@ class SlamLoop:
             if upd is not None:
                 self.counters["scans_processed"] += 1
                 if self._on_scan_done is not None:
-                    update, process_s = upd
-                    self._on_scan_done(ScanTiming(start - arrived, process_s, time.monotonic() - start,
+                    update, process_s, cpu_s = upd
+                    self._on_scan_done(ScanTiming(start - arrived, process_s, cpu_s, time.monotonic() - start,
                                                   update.integrated, update.loop_closed))
 
     def _skip(self, counter: str, msg: str) -> None:
@@ -215,8 +216,9 @@ class SlamLoop:
             return latest[1]
         return None
 
-    def _handle(self, msg: LaserScan) -> tuple[Update, float] | None:
-        """Process one scan; (the engine's update, seconds inside ``process``), or None if it was skipped."""
+    def _handle(self, msg: LaserScan) -> tuple[Update, float, float] | None:
+        """Process one scan; (the engine's update, wall and CPU seconds inside ``process``), or None if it
+        was skipped."""
         frame = msg.header.frame_id.strip().lstrip("/")
         t = msg.header.stamp.to_sec()
         if not frame:
@@ -239,16 +241,17 @@ class SlamLoop:
                 m2o = self._resume_m2o if self._resume_m2o is not None else self.engine.map_to_odom()
                 self.engine.set_initial_pose(compose(m2o, odom))
                 self._resumed, self._resume_m2o = False, None
-            t0 = time.perf_counter()
+            c0, t0 = time.thread_time(), time.perf_counter()
             upd = self.engine.process(scan, odom, t)
             process_s = time.perf_counter() - t0
+            cpu_s = time.thread_time() - c0
             self._note_process_time(1e3 * process_s)
             self._m2o = upd.map_to_odom
             self._last_stamp = max(self._last_stamp, t)
             if upd.map_changed:
                 self._map_dirty = True
         self._send_tf(t)
-        return upd, process_s
+        return upd, process_s, cpu_s
 
     def _note_process_time(self, ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
