@@ -1,5 +1,5 @@
 """SLAM fault scenarios in the MuJoCo apartment: data gap during a fast turn, odometry heading jumps, shuffled
-stamps, a 180° / 30 m scanner; scored by ATE and map IoU against ground truth.
+stamps, 180° / 30 m, 270° / 0.25° / 80 m and 360° / 1° / 30 m scanners; scored by ATE and map IoU against ground truth.
 
 One command: ``python bench/slam_faults.py`` (prints a table, writes bench/results/slam_faults.json).
 Each scenario also runs with ``drop_odom_jumps=True`` (the old jump guard that drops a large step's scan

@@ -14,6 +14,8 @@ pose. Each scenario then rewrites that stream the way a real system breaks it an
   its range_max sentinel (3 % of beams: dark or specular surfaces);
 - ``scanner_270``: the sim's lidar swapped for a 270° scanner with 0.25° steps (1081 beams) and an 80 m
   range that reports "no return" as range_max, 3 % of beams too (its own recording: :data:`SCANNER_DRIVES`);
+- ``scanner_360``: a 360° scanner with 1° steps and a 30 m range reporting "no return" as range_max, 3 %
+  of beams too (its own recording);
 - ``clean``: the stream as recorded (reference).
 
 Scores: ATE (RMSE of node positions vs ground truth at their stamps, start frame, no alignment) and the
@@ -44,10 +46,11 @@ TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2), (2.6, 7.0), (4
                               (2.6, 7.0), (2.6, 4.45), (3.8, 4.45))
 # The short tour for tests: the half-turn and a few metres either side of it.
 SHORT_TOUR: tuple[Waypoint, ...] = ((3.8, 4.0), (2.6, 4.0), (2.6, 5.2))
-SCENARIOS = ("clean", "gap_turn", "heading_jumps", "shuffled", "scanner_180", "scanner_270")
+SCENARIOS = ("clean", "gap_turn", "heading_jumps", "shuffled", "scanner_180", "scanner_270", "scanner_360")
 # Scenarios driven with a different lidar (LidarSpec overrides): they need their own recording.
 SCANNER_DRIVES: dict[str, dict[str, float]] = {"scanner_270": {"beams": 1081, "fov": 1.5 * math.pi,
-                                                               "range_max": 80.0}}
+                                                               "range_max": 80.0},
+                                               "scanner_360": {"beams": 360, "fov": 2 * math.pi, "range_max": 30.0}}
 # A 180° scanner sees half of what a 360° one does, so consecutive nodes overlap less: integrate every
 # 0.1 m / 0.1 rad instead of 0.2 (seeds 0-2, IoU 0.873 / 0.890 / 0.935 -> 0.956 / 0.955 / 0.957), and use
 # the long-range scanner's whole range.
@@ -204,22 +207,23 @@ def scanner_180(rec: Recording, rng: np.random.Generator, range_max: float = 30.
 
 
 def scanner_270(rec: Recording, rng: np.random.Generator, dark: float = 0.03) -> Delivery:
-    """The recording's own (270°, 0.25°, 80 m) lidar; no return (and ``dark`` of the beams) reported as
-    range_max, the sentinel."""
+    """The recording's own lidar (270°, 0.25°, 80 m for ``scanner_270``; 360°, 1°, 30 m for ``scanner_360``);
+    no return (and ``dark`` of the beams) reported as range_max, the sentinel."""
     out = []
     for f in rec.frames:
         r = f.ranges.copy()
         r[~np.isfinite(r) | (rng.random(r.size) < dark)] = rec.range_max
         out.append((_scan(rec, f, r), f.odom))
     n = len(rec.frames[0].ranges)
-    return Delivery(out, f"{n} beams over {math.degrees(rec.angle_increment * (n - 1)):.0f}° at "
+    full = n * rec.angle_increment >= 2 * math.pi - 1e-6  # a full circle: n steps, not n - 1, span it
+    return Delivery(out, f"{n} beams over {math.degrees(rec.angle_increment * (n if full else n - 1)):.0f}° at "
                     f"{math.degrees(rec.angle_increment):.2f}°, range_max {rec.range_max:g} m as the sentinel "
                     f"({dark:.0%} of beams)")
 
 
 FAULTS: dict[str, Callable[..., Delivery]] = {"clean": clean, "gap_turn": gap_turn, "heading_jumps": heading_jumps,
                                               "shuffled": shuffled, "scanner_180": scanner_180,
-                                              "scanner_270": scanner_270}
+                                              "scanner_270": scanner_270, "scanner_360": scanner_270}
 
 
 def replay(rec: Recording, delivery: Delivery, config: SlamConfig | None = None) -> tuple[SlamEngine, float]:

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from hal_panda_mobile.files import load_robot_description, load_scene
 from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim
+from robonix_common.grid import GridMap
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
 # Named-waypoint routes for the navigation evaluations (tests/integration/robonix_eval/test_nav_noise.py,
@@ -177,23 +178,32 @@ class ScriptedDriver:
         return c * vwx + s * vwy, -s * vwx + c * vwy, wz
 
 
-def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
-                   route: Sequence[Waypoint] | None = None, setting: LoopSetting | None = None,
-                   leg_timeout: float = 40.0) -> tuple[SlamLoopResult, SlamLoopResult]:
-    """(LC on, LC off) from ONE scripted drive of ``route`` (default LOOPS[scene]) under ``setting``
-    (default HARD if ``hard`` else REALISTIC): both engines get identical scans and odometry."""
-    st = setting or (HARD if hard else REALISTIC)
+@dataclass
+class LoopRecording:
+    """One scripted drive as SLAM's input: the scans (decimated / range-capped per the setting), the sim's
+    drifting odometry and the true pose at each scan, plus the sim's ground-truth grid."""
+
+    scene: str
+    setting: str
+    seed: int
+    scans: list[Scan]
+    odom: np.ndarray  # (N, 3) at each scan
+    gt: np.ndarray  # (N, 3) at each scan
+    drive: DriveResult
+    truth: GridMap
+    config: SlamConfig  # the SLAM config of the setting
+
+
+def _drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_timeout: float,
+                on_scan: Callable[[Scan, tuple[float, float, float], tuple[float, float, float]], None]
+                ) -> tuple[DriveResult, GridMap]:
+    """Drive ``wps`` in the sim; ``on_scan(scan, odom, gt)`` at each 10 Hz lidar scan. Returns how the
+    drive went and the ground-truth grid at the config's resolution."""
     robot = load_robot_description()
     sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=st.odom_noise, lidar_noise=st.lidar_noise)
     cfg = st.slam_config or SlamConfig()
-    engines = {lc: SlamEngine(SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": lc})) for lc in (True, False)}
-    seconds = {True: 0.0, False: 0.0}
-    latencies: dict[bool, list[float]] = {True: [], False: []}
     mx, my, _, myaw = robot.lidar.mount
     mount = (mx, my, myaw)
-    gt_at: dict[float, tuple[float, float, float]] = {}
-    odom_at: dict[float, tuple[float, float, float]] = {}
-    wps = list(route or LOOPS[scene])
     x0, y0, _, *_ = sim.ground_truth()
     driver = ScriptedDriver((x0, y0), wps, st.speed)
     ctrl_every = max(1, round(0.05 / sim.timestep))  # 20 Hz control
@@ -207,8 +217,6 @@ def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = Fals
         last_xy = (x, y)
         if step % scan_every == 0:
             s, o = sim.scan(), sim.odometry()
-            t = round(s.stamp, 6)
-            gt_at[t], odom_at[t] = (x, y, yaw), (o.x, o.y, o.yaw)
             ranges = np.asarray(s.ranges, dtype=np.float32)[::st.beam_step].copy()
             range_max = s.range_max
             if st.max_range is not None:
@@ -216,11 +224,7 @@ def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = Fals
                 ranges[ranges > range_max] = np.inf
             scan = Scan(ranges, s.angle_min, s.angle_increment * st.beam_step, s.range_min, range_max, s.stamp,
                         mount, s.frame_id)
-            for lc, eng in engines.items():
-                t0 = time.perf_counter()
-                eng.process(scan, (o.x, o.y, o.yaw), s.stamp)
-                latencies[lc].append(time.perf_counter() - t0)
-                seconds[lc] += latencies[lc][-1]
+            on_scan(scan, (o.x, o.y, o.yaw), (x, y, yaw))
         if driver.i != leg:
             leg, leg_t0 = driver.i, sim.time
         elif sim.time - leg_t0 > leg_timeout:  # stuck (should never happen): give up on the rest
@@ -228,7 +232,53 @@ def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = Fals
         sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
     sim.stop()
     drive = DriveResult(len(wps), driver.i, len(sim.collisions()), driven, sim.time, driver.max_track_error)
-    truth = sim.ground_truth_grid(cfg.resolution, min_height=robot.lidar.mount[2])
+    return drive, sim.ground_truth_grid(cfg.resolution, min_height=robot.lidar.mount[2])
+
+
+def record_loop(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
+                route: Sequence[Waypoint] | None = None, setting: LoopSetting | None = None,
+                leg_timeout: float = 40.0) -> LoopRecording:
+    """Drive the scripted loop once and keep SLAM's input, to feed it later (e.g. paced in wall time
+    through the provider's scan path, bench/slam_provider_drops.py)."""
+    st = setting or (HARD if hard else REALISTIC)
+    scans: list[Scan] = []
+    odom: list[tuple[float, float, float]] = []
+    gt: list[tuple[float, float, float]] = []
+
+    def keep(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float]) -> None:
+        scans.append(scan)
+        odom.append(o)
+        gt.append(g)
+
+    drive, truth = _drive_loop(scene, st, seed, list(route or LOOPS[scene]), leg_timeout, keep)
+    return LoopRecording(scene, st.name, seed, scans, np.asarray(odom, dtype=float).reshape(-1, 3),
+                         np.asarray(gt, dtype=float).reshape(-1, 3), drive, truth, st.slam_config or SlamConfig())
+
+
+def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
+                   route: Sequence[Waypoint] | None = None, setting: LoopSetting | None = None,
+                   leg_timeout: float = 40.0) -> tuple[SlamLoopResult, SlamLoopResult]:
+    """(LC on, LC off) from ONE scripted drive of ``route`` (default LOOPS[scene]) under ``setting``
+    (default HARD if ``hard`` else REALISTIC): both engines get identical scans and odometry."""
+    st = setting or (HARD if hard else REALISTIC)
+    cfg = st.slam_config or SlamConfig()
+    engines = {lc: SlamEngine(SlamConfig.from_dict({**cfg.to_dict(), "loop_closure": lc})) for lc in (True, False)}
+    seconds = {True: 0.0, False: 0.0}
+    latencies: dict[bool, list[float]] = {True: [], False: []}
+    gt_at: dict[float, tuple[float, float, float]] = {}
+    odom_at: dict[float, tuple[float, float, float]] = {}
+    wps = list(route or LOOPS[scene])
+
+    def feed(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float]) -> None:
+        t = round(scan.stamp, 6)
+        gt_at[t], odom_at[t] = g, o
+        for lc, eng in engines.items():
+            t0 = time.perf_counter()
+            eng.process(scan, o, scan.stamp)
+            latencies[lc].append(time.perf_counter() - t0)
+            seconds[lc] += latencies[lc][-1]
+
+    drive, truth = _drive_loop(scene, st, seed, wps, leg_timeout, feed)
     out = []
     for lc, eng in engines.items():
         eng.flush()  # the map may lag the optimised poses by a few calls' re-render budget: score the final map

@@ -1,7 +1,8 @@
 """The running work of the SLAM service: scan queue -> worker thread -> SlamEngine; /map and TF map->odom.
 
-The DDS callback only queues scans (dropping the oldest when the worker is behind, counted), so a
-slow optimisation never stalls the data plane. The worker pairs each scan with the odometry pose at the
+The DDS callback only queues scans (:class:`~slam_service.scan_queue.ScanQueue`: the oldest is dropped
+when the worker is behind, counted, and the deepest backlog is kept), so a slow optimisation never stalls
+the data plane. The worker pairs each scan with the odometry pose at the
 scan's stamp (TF odom->base, interpolated; the latest /odom as a fallback) and the lidar mount
 (static TF base->laser). Bad input is skipped with a counter and a rate-limited warning, never raised.
 A publisher thread keeps map->odom on /tf alive (also while paused) and publishes /map when it changed,
@@ -16,6 +17,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -25,7 +27,8 @@ from robonix_api.dds.convert import grid_to_msg, pose_to_xyyaw
 from robonix_api.upstream import Binding
 from robonix_common.geometry import compose
 from slam_service.config import Frames
-from slam_service.core import Scan, SlamEngine, kernels
+from slam_service.core import Scan, SlamEngine, Update, kernels
+from slam_service.scan_queue import ScanQueue
 
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
@@ -76,6 +79,23 @@ def install_engine_log_filter() -> None:
         eng.addFilter(EngineLogFilter())
 
 
+@dataclass(frozen=True)
+class ScanTiming:
+    """Where one processed scan's time went (wall s): waiting in the queue, then inside the worker."""
+
+    wait_s: float  # from the DDS callback queueing it to the worker taking it
+    process_s: float  # SlamEngine.process alone
+    process_cpu_s: float  # its CPU time on the worker thread: what it costs without neighbours competing
+    handle_s: float  # the worker's whole handling: TF/odometry lookup + process + map->odom out
+    integrated: bool
+    loop_closed: bool
+
+    @property
+    def latency_s(self) -> float:
+        """Arrival to done: what the scan's age is when its pose reaches map->odom."""
+        return self.wait_s + self.handle_s
+
+
 class SlamLoop:
     """The work of one session (see ``robonix_api.hosting``): subscriptions, worker and publisher threads."""
 
@@ -84,11 +104,13 @@ class SlamLoop:
                  map_id: str = "", on_map: Callable[[Any], None] | None = None,
                  on_change: Callable[[], None] | None = None,
                  autosave: Callable[[Any], None] | None = None, autosave_period_s: float = 2.0,
-                 resume_map_to_odom: tuple[float, float, float] | None = None) -> None:
+                 resume_map_to_odom: tuple[float, float, float] | None = None,
+                 on_scan_done: Callable[[ScanTiming], None] | None = None) -> None:
         self.frames, self.bindings = frames, bindings
         self.map_id = map_id  # the saved map this session runs on ("" = a new map)
         self._on_map = on_map  # after each /map publication, with the grid (telemetry)
         self._on_change = on_change  # after the map was replaced or reset (lifecycle announcements)
+        self._on_scan_done = on_scan_done  # per processed scan, on the worker thread (benches)
         self.engine = engine
         self.lock = threading.RLock()  # guards the engine (worker, RPC handlers, publisher)
         self.integrating = False
@@ -99,9 +121,7 @@ class SlamLoop:
         self._tf_out = TfBroadcaster(node)
         self._map_pub = map_pub
         self._map_period, self._tf_period = map_period_s, tf_period_s
-        self._queue: collections.deque[LaserScan] = collections.deque()
-        self._queue_size = queue_size
-        self._cv = threading.Condition()
+        self._queue: ScanQueue[LaserScan] = ScanQueue(queue_size)
         self._stop = threading.Event()
         self._warn = RateLimitedLog()
         self._mounts: dict[str, tuple[float, float, float]] = {}
@@ -140,14 +160,10 @@ class SlamLoop:
         if not self.integrating:
             self.counters["scans_paused"] += 1
             return
-        with self._cv:
-            if len(self._queue) >= self._queue_size:
-                self._queue.popleft()
-                self.counters["scans_dropped_behind"] += 1
-                self._warn("queue", f"SLAM is behind: dropped the oldest queued scan "
-                                    f"({self.counters['scans_dropped_behind']} so far)")
-            self._queue.append(msg)
-            self._cv.notify()
+        if self._queue.put(msg):
+            self.counters["scans_dropped_behind"] += 1
+            self._warn("queue", f"SLAM is behind: dropped the oldest queued scan "
+                                f"({self.counters['scans_dropped_behind']} so far)")
 
     def _on_odom(self, msg: Odometry) -> None:
         if msg.header.frame_id.strip().lstrip("/") != self.frames.odom:
@@ -159,16 +175,23 @@ class SlamLoop:
     # ---------------------------------------------------------------- worker
     def _work(self) -> None:
         while not self._stop.is_set():
-            with self._cv:
-                if not self._queue:
-                    self._cv.wait(0.5)
-                    continue
-                msg = self._queue.popleft()
+            item = self._queue.get(0.5)
+            if item is None:
+                continue
+            arrived, msg = item
+            start = time.monotonic()
             try:
-                self._handle(msg)
+                upd = self._handle(msg)
             except Exception as exc:  # a bug or an odd message must not kill mapping
                 self.counters["worker_errors"] += 1
                 log.exception("scan processing failed: %s", exc)
+                continue
+            if upd is not None:
+                self.counters["scans_processed"] += 1
+                if self._on_scan_done is not None:
+                    update, process_s, cpu_s = upd
+                    self._on_scan_done(ScanTiming(start - arrived, process_s, cpu_s, time.monotonic() - start,
+                                                  update.integrated, update.loop_closed))
 
     def _skip(self, counter: str, msg: str) -> None:
         self.counters[counter] += 1
@@ -193,7 +216,9 @@ class SlamLoop:
             return latest[1]
         return None
 
-    def _handle(self, msg: LaserScan) -> None:
+    def _handle(self, msg: LaserScan) -> tuple[Update, float, float] | None:
+        """Process one scan; (the engine's update, wall and CPU seconds inside ``process``), or None if it
+        was skipped."""
         frame = msg.header.frame_id.strip().lstrip("/")
         t = msg.header.stamp.to_sec()
         if not frame:
@@ -216,15 +241,17 @@ class SlamLoop:
                 m2o = self._resume_m2o if self._resume_m2o is not None else self.engine.map_to_odom()
                 self.engine.set_initial_pose(compose(m2o, odom))
                 self._resumed, self._resume_m2o = False, None
-            t0 = time.perf_counter()
+            c0, t0 = time.thread_time(), time.perf_counter()
             upd = self.engine.process(scan, odom, t)
-            self._note_process_time(1e3 * (time.perf_counter() - t0))
+            process_s = time.perf_counter() - t0
+            cpu_s = time.thread_time() - c0
+            self._note_process_time(1e3 * process_s)
             self._m2o = upd.map_to_odom
             self._last_stamp = max(self._last_stamp, t)
             if upd.map_changed:
                 self._map_dirty = True
         self._send_tf(t)
-        return None
+        return upd, process_s, cpu_s
 
     def _note_process_time(self, ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
@@ -310,9 +337,7 @@ class SlamLoop:
                 self._resumed = True
             self.integrating = on
         if not on:
-            with self._cv:
-                self.counters["scans_paused"] += len(self._queue)
-                self._queue.clear()
+            self.counters["scans_paused"] += self._queue.clear()
 
     def replace_engine(self, engine: SlamEngine, map_id: str = "") -> None:
         """Swap in a freshly loaded engine (load_map): the map is republished at once."""
@@ -357,12 +382,12 @@ class SlamLoop:
             engine = self.engine.stats.to_dict()
             mode = self.engine.mode
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
-                "process_ms_max": round(self.process_ms_max, 1), "engine": engine}
+                "process_ms_max": round(self.process_ms_max, 1), "queue_size": self._queue.size,
+                "queue_depth": len(self._queue), "queue_high_water": self._queue.high_water, "engine": engine}
 
     def close(self, reason: str = "") -> None:
         self._stop.set()
-        with self._cv:
-            self._cv.notify_all()
+        self._queue.wake()
         for th in self._threads:
             th.join(5.0)
         for item in (*self._subs, self.tf, self.clock, self._tf_out):

@@ -2,6 +2,10 @@
 
 One ``.npz`` (no pickle, so a hostile file cannot run code) with a format tag and a version; written to
 a temp file and renamed, so a crash or a full disk never leaves a half-written session behind.
+
+The no-return clearing of each node (``free_*`` arrays) is optional in the file: a session written before
+it was saved still loads (its map then lacks that clearing), and the version stays 1 so such a file is
+still readable by a build that does not know the arrays (it ignores them).
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:
     offsets = np.zeros(n + 1, dtype=np.int64)
     offsets[1:] = np.cumsum([len(p) for p in data.points]) if n else []
     arrays = {
+        **_free_arrays(data.free),
         "format": np.array(FORMAT),
         "version": np.array(VERSION),
         "config": np.array(json.dumps(data.config.to_dict())),
@@ -63,6 +68,35 @@ def save_session(data: SessionData, path: str | os.PathLike[str]) -> Path:
     except OSError as exc:
         raise SessionSaveError(f"cannot write SLAM session to {path}: {exc}") from exc
     return path
+
+
+def _free_arrays(free: dict[int, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-node no-return free-stretch ends, packed like the points: node ids, offsets, concatenated ends."""
+    nodes = sorted(int(k) for k, v in free.items() if len(v))
+    ends = [np.asarray(free[k], dtype=np.float32).reshape(-1, 2) for k in nodes]
+    offsets = np.zeros(len(nodes) + 1, dtype=np.int64)
+    offsets[1:] = np.cumsum([len(e) for e in ends]) if nodes else []
+    return {"free_nodes": np.asarray(nodes, dtype=np.int64),
+            "free_ends": np.concatenate(ends) if nodes else np.zeros((0, 2), np.float32),
+            "free_offsets": offsets}
+
+
+def _read_free(a: dict[str, np.ndarray], n: int) -> dict[int, np.ndarray] | str:
+    """The per-node free-stretch ends (empty for a file written without them), or what is wrong with them."""
+    if "free_nodes" not in a:
+        return {}
+    nodes, off, ends = a["free_nodes"], a.get("free_offsets"), a.get("free_ends")
+    if off is None or ends is None:
+        return "'free_nodes' without 'free_offsets'/'free_ends'"
+    if nodes.ndim != 1 or off.shape != (len(nodes) + 1,) or ends.ndim != 2 or ends.shape[1] != 2:
+        return "'free_*' arrays have inconsistent shapes"
+    if off[0] != 0 or off[-1] != len(ends) or np.any(np.diff(off) < 0):
+        return "'free_offsets' are inconsistent"
+    if len(nodes) and (nodes.min() < 0 or nodes.max() >= n or len(np.unique(nodes)) != len(nodes)):
+        return "'free_nodes' names a node that does not exist (or one twice)"
+    if not np.all(np.isfinite(ends)):
+        return "'free_ends' contains NaN/inf"
+    return {int(k): ends[off[i]:off[i + 1]].astype(np.float32) for i, k in enumerate(nodes)}
 
 
 NEEDED = ("config", "poses", "odom", "stamps", "path_dist", "points", "point_offsets", "origins", "edge_ij",
@@ -121,6 +155,9 @@ def load_session(path: str | os.PathLike[str]) -> SessionData:
     problem = _shape_problem(a)
     if problem:
         raise SessionFileError(f"{path}: {problem}")
+    free = _read_free(a, len(a["poses"]))
+    if isinstance(free, str):
+        raise SessionFileError(f"{path}: {free}")
     graph = PoseGraph(a["poses"].astype(np.float64).copy())
     try:
         for (i, j), zz, info, kind in zip(a["edge_ij"], a["edge_z"], a["edge_info"], a["edge_kind"], strict=True):
@@ -130,4 +167,4 @@ def load_session(path: str | os.PathLike[str]) -> SessionData:
     off, pts = a["point_offsets"], a["points"]
     points = [pts[off[k]:off[k + 1]].astype(np.float32) for k in range(len(a["poses"]))]
     return SessionData(graph, a["odom"].astype(np.float64), a["stamps"].astype(np.float64),
-                       a["path_dist"].astype(np.float64), points, a["origins"].astype(np.float64), config)
+                       a["path_dist"].astype(np.float64), points, a["origins"].astype(np.float64), config, free)

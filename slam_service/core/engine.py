@@ -23,7 +23,15 @@ from robonix_common.scan import Scan
 
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
-from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
+from .motion import (
+    StepWindows,
+    legacy_jump,
+    loop_radius,
+    loop_windows,
+    search_windows,
+    suspect_step,
+    unmatched_sigmas,
+)
 from .occupancy import LogOddsGrid
 from .posegraph import EDGE_LOOP, EDGE_ODOM, EDGE_SEQUENTIAL, OptimizeResult, PoseGraph
 from .preprocess import PreparedScan, ScanError, prepare_scan
@@ -85,6 +93,7 @@ class SlamEngine:
         self._step_motion = (0.0, 0.0, 0.0)  # (dist, rot, gap) of this scan's odometry since the last node
         self._glitch_seed: PoseArray | None = None  # "odometry glitched" seed of a suspect step
         self._drift = 0.0  # m, position std dev accrued since the last loop closure (loop candidate radius)
+        self._drift_theta = 0.0  # rad, heading std dev accrued since the last loop closure (loop window)
         self._reorder_newest = -math.inf  # newest stamp offered so far
         self._loc_ref_odom: PoseArray | None = None  # odometry at the last localization match
 
@@ -150,6 +159,8 @@ class SlamEngine:
             self._path = [float(d) for d in session.path_dist]
             self._points = list(session.points)
             self._origins = [np.asarray(o, dtype=float) for o in session.origins]
+            self._free = {int(k): np.asarray(v, dtype=np.float32).reshape(-1, 2) for k, v in session.free.items()
+                          if 0 <= int(k) < self.graph.n_nodes and len(v)}
             self._rerender()
             if self.graph.n_nodes:
                 self._resume_from = self.graph.n_nodes - 1
@@ -172,7 +183,7 @@ class SlamEngine:
                                     edge_info=list(g.edge_info), edge_kind=list(g.edge_kind))
         return SessionData(graph, np.asarray(self._odom).reshape(-1, 3), np.asarray(self._stamps, dtype=float),
                            np.asarray(self._path, dtype=float), list(self._points),
-                           np.asarray(self._origins).reshape(-1, 2), self.config)
+                           np.asarray(self._origins).reshape(-1, 2), self.config, dict(self._free))
 
     def _set_fixed_map(self, grid: GridMap) -> None:
         c = self.config
@@ -314,10 +325,9 @@ class SlamEngine:
     def _match(self, lookup: LookupGrid, points: NDArray, seed: PoseArray, loop: bool = False,
                step: StepWindows | None = None) -> MatchResult:
         c = self.config
-        step = step or self._step
-        return match_scan(lookup, points, seed,
-                          window_xy=c.loop_search_window_xy if loop else step.xy,
-                          window_theta=c.loop_search_window_theta if loop else step.theta,
+        if step is None:
+            step = self.loop_windows() if loop else self._step
+        return match_scan(lookup, points, seed, window_xy=step.xy, window_theta=step.theta,
                           angular_step=c.angular_step, coarse_factor=c.loop_coarse_factor if loop else c.coarse_factor,
                           refine=c.refine, sigma=c.smear_sigma, penalty=0.0 if loop else c.match_penalty)
 
@@ -365,6 +375,7 @@ class SlamEngine:
         dist = 0.0 if n == 0 else float(np.hypot(*(pose[:2] - self.graph.poses[prev][:2])))
         if n and kind == EDGE_ODOM:  # unmatched: its whole uncertainty adds to the drift
             self._drift += math.sqrt(cov[0, 0]) if cov is not None else c.odom_sigma_xy
+            self._drift_theta += math.sqrt(cov[2, 2]) if cov is not None else c.odom_sigma_theta
         else:
             self._drift += c.loop_drift_per_m * dist
         self._path.append((self._path[prev] if n else 0.0) + dist)
@@ -384,7 +395,7 @@ class SlamEngine:
         if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
             loop = self._try_loop_closure(k)
             if loop:
-                self._drift = 0.0
+                self._drift = self._drift_theta = 0.0
         if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
             self._render_pending()
         self.stats.scans_integrated += 1
@@ -480,28 +491,28 @@ class SlamEngine:
             return False
         d = np.hypot(*(poses[old, :2] - poses[k, :2]).T)
         radius = loop_radius(c, self._drift)
+        win = self.loop_windows()
         near = old[d <= radius]
         if len(near) == 0:
             return False
         cand = int(near[np.argmin(d[d <= radius])])
         sub = old[np.hypot(*(poses[old, :2] - poses[cand, :2]).T) <= c.loop_submap_radius]
-        key = (tuple(int(i) for i in sub), self.stats.optimizations)
+        key = (tuple(int(i) for i in sub), self.stats.optimizations, win.xy)
         if self._loop_lookup is None or self._loop_lookup[0] != key:
             # consecutive attempts usually see the same old submap: build its field (EDT) once
-            margin = required_margin(c.loop_search_window_xy, c.loop_coarse_factor, c.smear_sigma, c.resolution)
+            margin = required_margin(win.xy, c.loop_coarse_factor, c.smear_sigma, c.resolution)
             self._loop_lookup = (key, LookupGrid.from_points(self._node_points_map(sub), c.resolution,
                                                              c.smear_sigma, margin))
         lookup = self._loop_lookup[1]
         pts = self._points[k]
         # the wide correlative search only has to land in the right cell: half the beams suffice (the
         # refinement and the verification below use all of them)
-        m = self._match(lookup, pts[::2] if len(pts) > 180 else pts, poses[k], loop=True)
+        m = self._match(lookup, pts[::2] if len(pts) > 180 else pts, poses[k], loop=True, step=win)
         corr = float(np.hypot(*(m.pose[:2] - poses[k, :2])))
         limit = c.loop_max_correction + c.loop_max_correction_ratio * (path[k] - path[cand])
-        at_edge = (abs(m.pose[0] - poses[k, 0]) > c.loop_search_window_xy - c.resolution
-                   or abs(m.pose[1] - poses[k, 1]) > c.loop_search_window_xy - c.resolution
-                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi))
-                   > c.loop_search_window_theta - c.angular_step)
+        at_edge = (abs(m.pose[0] - poses[k, 0]) > win.xy - c.resolution
+                   or abs(m.pose[1] - poses[k, 1]) > win.xy - c.resolution
+                   or abs(math.remainder(m.pose[2] - poses[k, 2], 2 * math.pi)) > win.theta - c.angular_step)
         if m.response < c.loop_min_response or corr > limit or at_edge:
             return self._reject_loop("response/window")
         found = self._verified_loop(lookup, k, cand, m)
@@ -523,6 +534,10 @@ class SlamEngine:
         self._last_loop_node = k
         self._optimize((res, elapsed))
         return True
+
+    def loop_windows(self) -> StepWindows:
+        """The loop match's current search windows: wider after steps the scans could not pin down."""
+        return loop_windows(self.config, self._drift, self._drift_theta)
 
     def _reject_loop(self, why: str) -> bool:
         self.stats.loop_rejected += 1

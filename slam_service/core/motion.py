@@ -62,3 +62,19 @@ def loop_radius(c: SlamConfig, drift_sigma: float) -> float:
     the last loop closure (a long unmatched stretch may have drifted further), bounded."""
     r = c.loop_search_radius + 3.0 * max(drift_sigma, 0.0)
     return min(max(c.loop_search_radius, c.loop_search_radius_max), r) if math.isfinite(r) else c.loop_search_radius
+
+
+def loop_windows(c: SlamConfig, drift_xy: float, drift_theta: float) -> StepWindows:
+    """Loop-match search windows: the configured ones plus 3 sigma of the position / heading uncertainty
+    accrued since the last loop closure, bounded by ``loop_search_window_*_max``.
+
+    A candidate found by the widened radius is only useful if the correlative search can reach where the
+    robot really is: after a long stretch the scans could not pin down, the pose may be off by more than
+    the fixed window. A run that matched every step keeps the fixed window (and its cost)."""
+    def grow(base: float, cap: float, sigma: float) -> float:
+        w = base + 3.0 * max(sigma, 0.0)
+        return min(max(base, cap), w) if math.isfinite(w) else base
+
+    xy = grow(c.loop_search_window_xy, c.loop_search_window_xy_max, drift_xy)
+    th = grow(c.loop_search_window_theta, c.loop_search_window_theta_max, drift_theta)
+    return StepWindows(xy, th, xy > c.loop_search_window_xy or th > c.loop_search_window_theta)

@@ -26,3 +26,6 @@ class SessionData:
     points: list[NDArray[np.float32]] = field(default_factory=list)  # per node, base frame (P, 2)
     origins: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))  # lidar position, base
     config: SlamConfig = field(default_factory=SlamConfig)
+    # node -> base-frame ends of its no-return beams' free stretches ((F, 2), only nodes that have any):
+    # part of what a node draws into the map, so a reloaded session must have them to draw the same map
+    free: dict[int, NDArray[np.float32]] = field(default_factory=dict)

@@ -112,6 +112,12 @@ class SlamConfig:
                                          "dropped")
     loop_search_radius_max: float = param(10.0, gt=0, le=100.0, doc="m; the loop candidate radius grows with the "
                                           "pose uncertainty since the last loop closure up to this")
+    loop_search_window_xy_max: float = param(3.0, gt=0, le=10.0, doc="m; the loop search window half-width grows "
+                                             "by 3 sigma of the position uncertainty since the last loop closure "
+                                             "up to this")
+    loop_search_window_theta_max: float = param(0.8, gt=0, le=math.pi, doc="rad; the loop search heading "
+                                                "half-width grows by 3 sigma of the heading uncertainty since the "
+                                                "last loop closure up to this")
     loop_drift_per_m: float = param(0.0, ge=0, le=1.0, doc="m of position std dev accrued per m of matched travel "
                                     "(3 sigma widens the loop candidate radius); 0: only unmatched steps widen it "
                                     "(1 % cost 0.4 cm ATE on the hard sim loop: more, weaker candidates)")

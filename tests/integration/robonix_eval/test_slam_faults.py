@@ -63,3 +63,13 @@ def test_a_270_degree_quarter_degree_80_m_scanner_maps_the_tour() -> None:
     assert r.stats["beams_no_return"] > 0
     assert r.ate <= ATE_TARGET, r
     assert r.iou >= IOU_TARGET, r
+
+
+def test_a_360_degree_one_degree_30_m_scanner_with_a_sentinel_maps_the_tour() -> None:
+    rec = record(SHORT_TOUR, seed=0, lidar=SCANNER_DRIVES["scanner_360"])
+    assert len(rec.frames[0].ranges) == 360
+    r = run_scenario(rec, "scanner_360")
+    assert "360°" in r.note
+    assert r.stats["beams_no_return"] > 0
+    assert r.ate <= ATE_TARGET, r
+    assert r.iou >= IOU_TARGET, r
