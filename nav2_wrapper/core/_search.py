@@ -342,12 +342,20 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
             pending -= 1
             if rec[2 * cur] != seen:
                 continue            # closed already at this g (a duplicate entry)
-            rec[2 * cur] = done
-            expansions += 1
-            buckets = _room(buckets, fullest + 8)
             r = cur // cols
             c = cur - r * cols
             gcur = np.float64(recg[2 * cur + 1])
+            if rec[2 * goal] >= seen:
+                # The goal has a cost U: a cell with f >= U leads to no cheaper goal (h is a lower bound), so it
+                # is left open, and once U is below this bucket every open cell has f >= U.
+                ub = np.float64(recg[2 * goal + 1])
+                if ub * inv <= cb:
+                    return True, expansions
+                if cur == goal or gcur + h_scale * _octile(r, c, gr, gc) >= ub:
+                    continue
+            rec[2 * cur] = done
+            expansions += 1
+            buckets = _room(buckets, fullest + 8)
             if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
@@ -381,26 +389,28 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
                     fullest = max(fullest, n)
         heads[b] = 0
         counts[b] = 0
-        if rec[2 * goal] == done:
-            return True, expansions
+        if rec[2 * goal] >= seen and np.float64(recg[2 * goal + 1]) * inv < cb + 1:
+            return True, expansions     # later buckets hold only f >= cb + 1 > the goal's cost
         cb += 1
     return False, expansions
 
 
 @njit(cache=True)
 def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
-    """Flat cell indices from ``start`` to ``cell`` through the cells the last ``astar`` with ``stamp`` closed.
+    """Flat cell indices from ``start`` to ``cell`` through the cells the last search with ``stamp`` reached.
 
-    Each step goes back to the closed neighbour whose g plus the move cost is smallest: that is the
-    neighbour the search relaxed the cell from (or one tying with it), so the path's cost is the search's
-    g; among ties the one straight ahead wins. g drops by at least 1 per step, so the walk ends at the
-    start (g = 0).
+    Each step goes back to the reached (open or closed) neighbour whose g plus the move cost is smallest. The
+    neighbour the search relaxed the cell from qualifies: its g can only have dropped since, so the minimum
+    is at most the cell's g, and the path's cost is the search's g (a cheaper one would contradict the
+    goal's g being optimal). Open cells count because the bucket search leaves cells open once their f
+    reaches the goal's cost, and a cell improved by a rounding-sized amount may be among them. Among ties
+    the one straight ahead wins. g drops by at least 1 per step, so the walk ends at the start (g = 0).
     """
     rows, cols = costs.shape
     flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
-    done = 2 * stamp + 1
+    seen = 2 * stamp
     out = np.empty(256, np.int64)
     m = 0
     cur = cell
@@ -425,8 +435,8 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
                 continue
             p = pr * cols + pc
-            if rec[2 * p] != done:
-                continue
+            if rec[2 * p] < seen:
+                continue            # not reached by this plan
             v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
             if v < bestv:
                 bestv = v
