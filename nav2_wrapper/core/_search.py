@@ -336,9 +336,9 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     expansions = 0
     while pending > 0:
         b = cb & mask
-        while heads[b] < counts[b]:
-            cur = buckets[b, heads[b]]
-            heads[b] += 1
+        while counts[b] > 0:
+            counts[b] -= 1
+            cur = buckets[b, counts[b]]
             pending -= 1
             if rec[2 * cur] != seen:
                 continue            # closed already at this g (a duplicate entry)
@@ -347,11 +347,14 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
             gcur = np.float64(recg[2 * cur + 1])
             if rec[2 * goal] >= seen:
                 # The goal has a cost U: a cell with f >= U leads to no cheaper goal (h is a lower bound), so it
-                # is left open, and once U is below this bucket every open cell has f >= U.
+                # is not expanded; it is marked closed all the same, so that a better g later files it again
+                # (an open cell is taken to have an entry waiting). Once U is below this bucket, every cell
+                # still waiting has f >= U.
                 ub = np.float64(recg[2 * goal + 1])
                 if ub * inv <= cb:
                     return True, expansions
                 if cur == goal or gcur + h_scale * _octile(r, c, gr, gc) >= ub:
+                    rec[2 * cur] = done
                     continue
             rec[2 * cur] = done
             expansions += 1
