@@ -289,25 +289,51 @@ def _behind_masks(drs, dcs):
     return behind
 
 
+@njit(cache=True, inline="always")
+def _expand_checked(flat, table, rows, cols, r, c, gcur, sr, sc, esc_r2, esc_cost, rec, recg, dirs, seen, gr, gc,
+                    h_scale, inv, cb, mask, buckets, counts, drs, dcs, fullest):
+    """Relax all 8 neighbours of (r, c) with bounds checks and the escape disc (map edge, near the start).
+    Returns (entries filed, the longest bucket seen)."""
+    added = 0
+    for k in range(8):
+        nr, nc = r + drs[k], c + dcs[k]
+        if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
+            continue
+        f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+        if f == np.inf:
+            continue
+        n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask,
+                   buckets, counts)
+        added += n > 0
+        fullest = max(fullest, n)
+    return added, fullest
+
+
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
     by at most (max step + √2·h_scale), so the open cells always fall into a sliding window of
-    ``nbuckets`` buckets of width ``delta`` (a ring of FIFO arrays). Push and pop are O(1), no sifting.
-    Inside a bucket the order is first in, first out, so a cell may be expanded before its best g is
-    known; it is then re-opened when the better g arrives (label correcting inside the bucket). Once a
-    bucket is empty every cell with f in it has its final g, because anything cheaper would come through
-    a cell with a smaller f, all of which are done; the goal's g is exact once its bucket is emptied.
+    ``nbuckets`` buckets of width ``delta`` (a ring of arrays). Push and pop are O(1), no sifting.
+    Inside a bucket the order is last in, first out: on the long plateaus of equal f in open space the
+    newest cells are the ones nearest the goal, so the search dives to the goal instead of sweeping the
+    plateau. A cell may be expanded before its best g is known; it is then re-opened when the better g
+    arrives (label correcting inside the bucket). Once a bucket is empty every cell with f in it has its
+    final g, because anything cheaper would come through a cell with a smaller f, all of which are done.
+    Once the goal has a cost U, a popped cell with f >= U is not expanded (h is a lower bound, so nothing
+    through it beats U), and the search stops as soon as U lies below the current bucket: every cell still
+    waiting then has f >= U, so U is optimal. This spares most of the goal's own bucket, which on an open
+    map holds a whole plateau of cells with f equal to the goal's cost.
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
     g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
     directly by a move costing less than any detour through this cell; nor of the two side neighbours when
     p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
-    path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
-    reachable from the start is closed.
+    path, so every g stays exact. Same record layout and return value as ``astar``; on success the goal
+    may be left open (``backtrack`` walks open cells too); on failure every cell reachable from the start
+    is closed.
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -320,7 +346,6 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     mask = nbuckets - 1
     buckets = np.empty((nbuckets, 1024), np.int32)
     counts = np.zeros(nbuckets, np.int64)
-    heads = np.zeros(nbuckets, np.int64)
     rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
     fullest = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
@@ -379,19 +404,10 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
                     pending += n > 0
                     fullest = max(fullest, n)
             else:
-                for k in range(8):
-                    nr, nc = r + drs[k], c + dcs[k]
-                    if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
-                        continue
-                    f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-                    if f == np.inf:
-                        continue
-                    n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb,
-                               mask, buckets, counts)
-                    pending += n > 0
-                    fullest = max(fullest, n)
-        heads[b] = 0
-        counts[b] = 0
+                added, fullest = _expand_checked(flat, table, rows, cols, r, c, gcur, sr, sc, esc_r2, esc_cost, rec,
+                                                 recg, dirs, seen, gr, gc, h_scale, inv, cb, mask, buckets, counts,
+                                                 drs, dcs, fullest)
+                pending += added
         if rec[2 * goal] >= seen and np.float64(recg[2 * goal + 1]) * inv < cb + 1:
             return True, expansions     # later buckets hold only f >= cb + 1 > the goal's cost
         cb += 1
