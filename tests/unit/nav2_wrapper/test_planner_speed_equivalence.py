@@ -1,7 +1,8 @@
 """The cost-optimal planner (heuristic_weight 1.0) returns exactly the cheapest path: its cost equals a plain
 Dijkstra written independently here, on small random maps, including starts inside the inscribed band
-(the escape disc), blocked goals (tolerance) and unreachable goals. Its kernel is tuned for speed (packed
-heap, stamped records, path recovered from g), so this is the check that none of that changed the answer.
+(the escape disc), blocked goals (tolerance), unreachable goals and unknown regions. Its kernel is tuned for
+speed (bucket queue, stamped records, path recovered from g, moves pruned, cells with f at or above the
+goal's cost left unexpanded and an early stop), so this is the check that none of that changed the answer.
 """
 
 from __future__ import annotations
