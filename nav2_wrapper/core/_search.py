@@ -289,26 +289,6 @@ def _behind_masks(drs, dcs):
     return behind
 
 
-@njit(cache=True, inline="always")
-def _expand_checked(flat, table, rows, cols, r, c, gcur, sr, sc, esc_r2, esc_cost, rec, recg, dirs, seen, gr, gc,
-                    h_scale, inv, cb, mask, buckets, counts, drs, dcs, fullest):
-    """Relax all 8 neighbours of (r, c) with bounds checks and the escape disc (map edge, near the start).
-    Returns (entries filed, the longest bucket seen)."""
-    added = 0
-    for k in range(8):
-        nr, nc = r + drs[k], c + dcs[k]
-        if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
-            continue
-        f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-        if f == np.inf:
-            continue
-        n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask,
-                   buckets, counts)
-        added += n > 0
-        fullest = max(fullest, n)
-    return added, fullest
-
-
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
@@ -316,24 +296,18 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
     by at most (max step + √2·h_scale), so the open cells always fall into a sliding window of
     ``nbuckets`` buckets of width ``delta`` (a ring of FIFO arrays). Push and pop are O(1), no sifting.
-    Inside a bucket the order is first in, first out (last in, first out was tried: 3-7 % more expansions
-    on the bench maps, from more re-opened cells), so a cell may be expanded before its best g is known;
-    it is then re-opened when the better g arrives (label correcting inside the bucket). Once a bucket is
-    empty every cell with f in it has its final g, because anything cheaper would come through a cell with
-    a smaller f, all of which are done.
-    Once the goal has a cost U, a popped cell with f >= U is not expanded (h is a lower bound, so nothing
-    through it beats U), and the search stops as soon as U lies below the current bucket: every cell still
-    waiting then has f >= U, so U is optimal. This spares most of the goal's own bucket, which on an open
-    map holds a whole plateau of cells with f equal to the goal's cost.
+    Inside a bucket the order is first in, first out, so a cell may be expanded before its best g is
+    known; it is then re-opened when the better g arrives (label correcting inside the bucket). Once a
+    bucket is empty every cell with f in it has its final g, because anything cheaper would come through
+    a cell with a smaller f, all of which are done; the goal's g is exact once its bucket is emptied.
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
     g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
     directly by a move costing less than any detour through this cell; nor of the two side neighbours when
     p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
-    path, so every g stays exact. Same record layout and return value as ``astar``; on success the goal
-    may be left open (``backtrack`` walks open cells too); on failure every cell reachable from the start
-    is closed.
+    path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
+    reachable from the start is closed.
     """
     rows, cols = costs.shape
     flat = costs.ravel()
@@ -368,23 +342,12 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
             pending -= 1
             if rec[2 * cur] != seen:
                 continue            # closed already at this g (a duplicate entry)
-            r = cur // cols
-            c = cur - r * cols
-            gcur = np.float64(recg[2 * cur + 1])
-            if rec[2 * goal] >= seen:
-                # The goal has a cost U: a cell with f >= U leads to no cheaper goal (h is a lower bound), so it
-                # is not expanded; it is marked closed all the same, so that a better g later files it again
-                # (an open cell is taken to have an entry waiting). Once U is below this bucket, every cell
-                # still waiting has f >= U.
-                ub = np.float64(recg[2 * goal + 1])
-                if ub * inv <= cb:
-                    return True, expansions
-                if cur == goal or gcur + h_scale * _octile(r, c, gr, gc) >= ub:
-                    rec[2 * cur] = done
-                    continue
             rec[2 * cur] = done
             expansions += 1
             buckets = _room(buckets, fullest + 8)
+            r = cur // cols
+            c = cur - r * cols
+            gcur = np.float64(recg[2 * cur + 1])
             if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
@@ -405,34 +368,39 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
                     pending += n > 0
                     fullest = max(fullest, n)
             else:
-                added, fullest = _expand_checked(flat, table, rows, cols, r, c, gcur, sr, sc, esc_r2, esc_cost, rec,
-                                                 recg, dirs, seen, gr, gc, h_scale, inv, cb, mask, buckets, counts,
-                                                 drs, dcs, fullest)
-                pending += added
+                for k in range(8):
+                    nr, nc = r + drs[k], c + dcs[k]
+                    if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
+                        continue
+                    f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+                    if f == np.inf:
+                        continue
+                    n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb,
+                               mask, buckets, counts)
+                    pending += n > 0
+                    fullest = max(fullest, n)
         heads[b] = 0
         counts[b] = 0
-        if rec[2 * goal] >= seen and np.float64(recg[2 * goal + 1]) * inv < cb + 1:
-            return True, expansions     # later buckets hold only f >= cb + 1 > the goal's cost
+        if rec[2 * goal] == done:
+            return True, expansions
         cb += 1
     return False, expansions
 
 
 @njit(cache=True)
 def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
-    """Flat cell indices from ``start`` to ``cell`` through the cells the last search with ``stamp`` reached.
+    """Flat cell indices from ``start`` to ``cell`` through the cells the last ``astar`` with ``stamp`` closed.
 
-    Each step goes back to the reached (open or closed) neighbour whose g plus the move cost is smallest. The
-    neighbour the search relaxed the cell from qualifies: its g can only have dropped since, so the minimum
-    is at most the cell's g, and the path's cost is the search's g (a cheaper one would contradict the
-    goal's g being optimal). Open cells count because the bucket search leaves cells open once their f
-    reaches the goal's cost, and a cell improved by a rounding-sized amount may be among them. Among ties
-    the one straight ahead wins. g drops by at least 1 per step, so the walk ends at the start (g = 0).
+    Each step goes back to the closed neighbour whose g plus the move cost is smallest: that is the
+    neighbour the search relaxed the cell from (or one tying with it), so the path's cost is the search's
+    g; among ties the one straight ahead wins. g drops by at least 1 per step, so the walk ends at the
+    start (g = 0).
     """
     rows, cols = costs.shape
     flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
-    seen = 2 * stamp
+    done = 2 * stamp + 1
     out = np.empty(256, np.int64)
     m = 0
     cur = cell
@@ -457,8 +425,8 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
                 continue
             p = pr * cols + pc
-            if rec[2 * p] < seen:
-                continue            # not reached by this plan
+            if rec[2 * p] != done:
+                continue
             v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
             if v < bestv:
                 bestv = v
