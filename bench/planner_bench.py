@@ -14,8 +14,9 @@ traversal factor per cell (1 + 2·cost/252, inf for inscribed/lethal). Its cost 
 that cannot be configured: a diagonal move costs the entered cell's weight, not √2 times it (and it may
 squeeze diagonally between two blocked cells). So the costs are compared in our model: its path, costed as
 we cost moves, must never be cheaper than ours (ours is optimal in that model), and the ratio is reported.
-Reports median/p95/max plan time per density and setting, our time / peer time, expansions, and the
-controller's compute time per step. Writes bench/results/planner.json.
+Reports median/p95/max plan time per density and setting (wall clock, and the planning thread's CPU
+time, which a loaded machine inflates far less), our time / peer time, expansions, the load average at
+start and end, and the controller's compute time per step. Writes bench/results/planner.json.
 """
 
 from __future__ import annotations
@@ -126,17 +127,20 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     """Each pair: our plan, then the peer's, timed back to back (the machine's load hits both alike)."""
     table = planner.traversal_table()
     ours, theirs, expansions, ratio, fails, peer_fails, cheaper, squeezes = [], [], [], [], 0, 0, 0, 0
+    ours_cpu, theirs_cpu = [], []
     for s, g in pairs:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         r = planner.plan(cm, world(cm, s), world(cm, g))
         ours.append((time.perf_counter() - t0) * 1e3)
+        ours_cpu.append((time.thread_time() - c0) * 1e3)
         expansions.append(r.expansions)
         fails += not r.ok
         if peer is None:
             continue
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         p = peer.plan(s, g)
         theirs.append((time.perf_counter() - t0) * 1e3)
+        theirs_cpu.append((time.thread_time() - c0) * 1e3)
         if p is None:
             peer_fails += 1
             continue
@@ -146,9 +150,11 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
         elif r.ok:
             ratio.append(pc / r.cost)
             cheaper += pc < r.cost * (1 - 1e-5)
-    row: dict = {"ours_ms": stats(ours), "expansions_median": int(np.median(expansions)), "failures": fails}
+    row: dict = {"ours_ms": stats(ours), "ours_cpu_ms": stats(ours_cpu),
+                 "expansions_median": int(np.median(expansions)), "failures": fails}
     if peer is not None:
-        row.update({"peer_ms": stats(theirs), "peer_failures": peer_fails,
+        row.update({"peer_ms": stats(theirs), "peer_cpu_ms": stats(theirs_cpu), "peer_failures": peer_fails,
+                    "ours_over_peer_cpu_median": round(row["ours_cpu_ms"]["median"] / stats(theirs_cpu)["median"], 3),
                     "ours_over_peer_median": round(row["ours_ms"]["median"] / stats(theirs)["median"], 3),
                     "ours_over_peer_p95": round(row["ours_ms"]["p95"] / stats(theirs)["p95"], 3),
                     "peer_path_cost_over_ours_median": round(float(np.median(ratio)), 4) if ratio else None,
@@ -228,10 +234,13 @@ def main() -> None:
             r = row[name] = run_setting(cm, planner, peer, pairs)
             line = (f"density {row['obstacle_density']:.2f} {name:4s}: ours median {r['ours_ms']['median']:.1f} ms, "
                     f"p95 {r['ours_ms']['p95']:.1f}, max {r['ours_ms']['max']:.1f} "
-                    f"({r['expansions_median']} expansions median, {r['failures']} failures)")
+                    f"(CPU median {r['ours_cpu_ms']['median']:.1f}, p95 {r['ours_cpu_ms']['p95']:.1f}; "
+                    f"{r['expansions_median']} expansions median, {r['failures']} failures)")
             if peer is not None:
                 line += (f" | pyastar2d median {r['peer_ms']['median']:.1f} ms, p95 {r['peer_ms']['p95']:.1f}, "
-                         f"max {r['peer_ms']['max']:.1f} | ours/peer {r['ours_over_peer_median']:.2f} (median), "
+                         f"max {r['peer_ms']['max']:.1f} (CPU median {r['peer_cpu_ms']['median']:.1f}, "
+                         f"p95 {r['peer_cpu_ms']['p95']:.1f}) | ours/peer {r['ours_over_peer_median']:.2f} (median), "
+                         f"{r['ours_over_peer_cpu_median']:.2f} (CPU median), "
                          f"{r['ours_over_peer_p95']:.2f} (p95) | peer path cost/ours median "
                          f"{r['peer_path_cost_over_ours_median']}, min {r['peer_path_cost_over_ours_min']}, "
                          f"{r['peer_paths_cheaper_than_ours']} cheaper, "
@@ -240,6 +249,7 @@ def main() -> None:
         results["densities"][f"{dens:.2f}"] = row
         s, g = pick_pairs(cm, 1, rng, *SETTINGS["far"])[0]
         ctrl_times += controller_step_times(cm, planner.plan(cm, world(cm, s), world(cm, g)).path, world(cm, g))
+    results["load_avg_at_end"] = os.getloadavg()[0]
     cms = np.array(ctrl_times) * 1e3
     results["controller_ms_median"] = round(float(np.median(cms)), 3)
     results["controller_ms_p95"] = round(float(np.percentile(cms, 95)), 3)

@@ -190,12 +190,12 @@ def densify(pts: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
     """Insert points so consecutive ones are ≤ spacing apart (controllers expect dense Nav2-style paths)."""
     if len(pts) < 2:
         return pts.copy()
-    out = [pts[:1]]
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        n = max(1, int(math.ceil(float(np.hypot(*(b - a))) / spacing)))
-        t = (np.arange(1, n + 1) / n)[:, None]
-        out.append(a + t * (b - a))
-    return np.vstack(out)
+    seg = np.diff(pts, axis=0)
+    n = np.maximum(1, np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / spacing)).astype(np.int64)
+    which = np.repeat(np.arange(len(seg)), n)               # one array op per path, not a loop per vertex
+    k = np.arange(1, len(which) + 1) - np.repeat(np.cumsum(n) - n, n)
+    t = (k / n[which])[:, None]
+    return np.vstack([pts[:1], pts[:-1][which] + t * seg[which]])
 
 
 def path_length(path: NDArray[np.float64]) -> float:
