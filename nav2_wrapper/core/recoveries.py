@@ -282,6 +282,7 @@ class RecoverySequence:
         self._next = 0
         self.active: Behavior | None = None
         self.history: list[str] = []
+        self._last_failed: str | None = None
 
     @property
     def exhausted(self) -> bool:
@@ -289,10 +290,11 @@ class RecoverySequence:
 
     def begin(self, now: float, pose: Pose2D, prefer: str | None = None) -> Behavior | None:
         """Start the next behaviour, or None when the budget is spent. ``prefer`` names a configured
-        behaviour to run now instead (the round-robin position is kept); it spends a retry all the same."""
+        behaviour to run now instead (the round-robin position is kept), unless its last run failed — then
+        the round-robin tries something else; it spends a retry all the same."""
         if self.exhausted or not self._behaviors:
             return None
-        chosen = [b for b in self._behaviors if b.name == prefer]
+        chosen = [b for b in self._behaviors if b.name == prefer and b.name != self._last_failed]
         if chosen:
             self.active = chosen[0]
         else:
@@ -308,5 +310,6 @@ class RecoverySequence:
             return Step(done=True, ok=False, detail="no recovery running")
         s = self.active.step(now, pose, costmap, ctrl)
         if s.done:
+            self._last_failed = None if s.ok else self.active.name
             self.active = None
         return s

@@ -116,6 +116,9 @@ def test_no_free_motion_is_reported_with_scan_points() -> None:
     assert "none of" in s.detail, s.detail
     assert "collision-free" in s.detail, s.detail
     assert (s.vx, s.vy, s.wz) == (0.0, 0.0, 0.0)
+    again = seq.begin(0.1, pose, prefer="escape")                      # it just failed: try something else
+    assert again is not None
+    assert again.name == "spin"
     # without the scan points the same spot is open: the refusal came from them
     free = RecoverySequence(RecoveryConfig(behaviors=("escape",)), lambda: None)
     free.begin(0.0, pose)
