@@ -210,3 +210,27 @@ def test_blocked_toward_detects_pressing_into_a_post() -> None:
     obs = esc.gather_obstacles(cm, pose[0], pose[1], 1.2)
     assert esc.blocked_toward(POLY, pose, obs, (-1.0, 0.0), margin=0.05)      # toward the post behind
     assert not esc.blocked_toward(POLY, pose, obs, (1.0, 0.0), margin=0.05)   # away from it
+
+
+def test_navigator_escapes_a_stalled_base_well_before_the_plain_allowance() -> None:
+    """The base does not move whatever it is told (a wheel against a post the map does not show): the
+    progress checker calls it blocked after blocked_time_allowance and the escape starts, instead of the
+    robot sitting out movement_time_allowance."""
+    from nav2_wrapper.core import Navigator
+    from nav2_wrapper.params import load_params
+
+    n = Navigator(load_params("sim").config)
+    pose = (1.5, 1.5, 0.0)
+    n.tick(0.0, pose, grid=room(6, 6))
+    n.navigate(4.5, 4.5, 0.0, 0.0)
+    t, cmd = 0.0, None
+    while t < 8.0:
+        t += 0.05
+        cmd = n.tick(t, pose)
+        if "recovering" in cmd.detail:
+            break
+    assert cmd is not None
+    assert "recovering: escape after: blocked: commanded" in cmd.detail, cmd.detail
+    pc = n.cfg.progress_checker
+    assert t < pc.movement_time_allowance / 2
+    assert n.recovery.history == ["escape"]
