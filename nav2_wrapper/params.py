@@ -303,7 +303,7 @@ def _planner_server(rd: _Reader, into: Fields) -> None:
 def _behaviors(rd: _Reader, into: Fields, bt_path: str) -> None:
     raw, path = rd.node("behavior_server")
     v = rd.read(ps.BEHAVIOR_SERVER, raw, path, into)
-    available = {"clear_costmaps"}
+    available = {"clear_costmaps", "escape"}   # escape: built in, like clear_costmaps (a plugin entry is optional)
     for name in v["behavior_plugins"]:
         sec, table = rd.plugin(raw, path, name, _plugins_for(ps.BEHAVIOR), "behavior")
         rd.read(table, sec, f"{path}.{name}")

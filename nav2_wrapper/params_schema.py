@@ -237,9 +237,12 @@ BEHAVIOR_SERVER = Section("behavior_server", (
     compat("cycle_frequency", float, 10.0, "behaviours step at the controller rate"),
     *(core(RecoveryConfig, n) for n in ("simulate_ahead_time", "max_rotational_vel", "min_rotational_vel",
                                         "rotational_acc_lim", "time_allowance")),
+    *(core(RecoveryConfig, n) for n in ("escape_dist", "escape_turn", "escape_directions", "escape_speed",
+                                        "escape_margin", "escape_enough", "escape_tolerance", "escape_reach")),
 ), nested=True)
 
-BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait"}
+BEHAVIORS = {"nav2_behaviors/Spin": "spin", "nav2_behaviors/BackUp": "backup", "nav2_behaviors/Wait": "wait",
+             "robonix_nav/Escape": "escape"}
 BEHAVIOR = Section("behavior_server.<behavior>", (_plugin(),), tuple(BEHAVIORS))
 
 #: Every table, in the order the reference lists them.

@@ -20,7 +20,8 @@ from robonix_common.grid import GridMap
 from robonix_common.params import param
 from robonix_common.scan import Scan
 
-from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
+from . import escape as esc
+from .checkers import BLOCKED, SLOW, GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, HolonomicController
 from .costmap import Costmap, CostmapConfig
 from .costs import INSCRIBED, LETHAL
@@ -127,7 +128,8 @@ class Navigator:
                            else MppiController(self.cfg.controller, self.cfg.mppi))
         self.goal_checker = GoalChecker(self.cfg.goal_checker)
         self.progress = ProgressChecker(self.cfg.progress_checker)
-        self.recovery = RecoverySequence(self.cfg.recovery, self.clear_costmaps)
+        self._scan_pts: np.ndarray | None = None
+        self.recovery = RecoverySequence(self.cfg.recovery, self.clear_costmaps, lambda: self._scan_pts)
         self.records: dict[str, GoalRecord] = {}
         self.active: GoalRecord | None = None
         self.latest: GoalRecord | None = None
@@ -234,6 +236,7 @@ class Navigator:
             sp = sensor_pose if sensor_pose is not None else pose
             self.global_costmap.update_scan(scan, sp)
             self.local_costmap.update_scan(scan, sp)
+            self._scan_pts = esc.scan_points(scan, sp)
 
     def _start(self, rec: GoalRecord, now: float, pose: Pose2D) -> bool:
         if not self.has_map:
@@ -267,6 +270,7 @@ class Navigator:
                 return Command(step.vx, step.vy, step.wz, rec.state, rec.detail, rec.run_id)
             self._force_replan = True
             self.progress.reset()
+            self._last_cmd_speed = None
         if self.goal_checker.is_goal_reached(pose, rec.goal, vel):
             err = math.hypot(pose[0] - rec.goal[0], pose[1] - rec.goal[1])
             self._finish(rec, SUCCEEDED, f"reached goal ({err:.2f} m from it, {rec.recoveries} recoveries)", now)
@@ -277,11 +281,11 @@ class Navigator:
             res = self._plan(pose, now)
             if not res.ok:
                 return self._recover(rec, now, pose, res.reason)
-        if not self.progress.check(now, pose):
+        prog = self.progress.assess(now, pose, command=self._last_cmd_speed, remaining=self._last_remaining,
+                                    pressed=self._pressed(pose, vel))
+        if not prog.ok:
             self.progress.reset()
-            return self._recover(rec, now, pose, "no progress "
-                                 f"({self.cfg.progress_checker.required_movement_radius:.2f} m in "
-                                 f"{self.cfg.progress_checker.movement_time_allowance:.0f} s)")
+            return self._recover(rec, now, pose, prog.detail, prefer="escape" if prog.state == BLOCKED else None)
         out = self.controller.compute(pose, vel, rec.goal, self.local_costmap, dt,
                                       self.goal_checker.xy_reached(pose, rec.goal))
         if out.blocked:
@@ -290,12 +294,15 @@ class Navigator:
                 self._blocked_since = now
             elif now - self._blocked_since > nc.blocked_timeout:
                 self._blocked_since = None
-                return self._recover(rec, now, pose, "controller found no collision-free command")
+                return self._recover(rec, now, pose, "blocked: controller found no collision-free command",
+                                     prefer="escape")
         else:
             self._blocked_since = None
+        self._last_cmd_speed, self._last_remaining = math.hypot(out.vx, out.vy), out.remaining
         speed = max(self.cfg.controller.desired_linear_vel * self.controller.speed_limit, 1e-3)
         rec.detail = (f"{out.remaining:.2f} m remaining, ETA {out.remaining / speed:.0f} s, "
-                      f"{rec.recoveries} recoveries" + (", blocked" if out.blocked else ""))
+                      f"{rec.recoveries} recoveries" + (", blocked" if out.blocked else "")
+                      + (f", {prog.detail}" if prog.state == SLOW else ""))
         return Command(out.vx, out.vy, out.wz, rec.state, rec.detail, rec.run_id)
 
     # ---- helpers ----------------------------------------------------------------------------------
@@ -351,8 +358,21 @@ class Navigator:
         cl = self.local_costmap.cost_at(seg[:, 0], seg[:, 1], outside=0)
         return bool(np.any(((c >= INSCRIBED) & (c <= LETHAL)) | ((cl >= INSCRIBED) & (cl <= LETHAL))))
 
-    def _recover(self, rec: GoalRecord, now: float, pose: Pose2D, why: str) -> Command:
-        beh = self.recovery.begin(now, pose)
+    def _pressed(self, pose: Pose2D, vel: tuple[float, float, float]) -> bool:
+        """Standing (nearly) still with the footprint at the escape margin toward the path: the progress
+        checker's cue that the base is blocked, not slow. Skipped while moving (it costs a clearance query)."""
+        p = self.controller.path
+        if len(p) == 0 or math.hypot(vel[0], vel[1]) >= self.cfg.progress_checker.blocked_speed:
+            return False
+        i = int(np.argmin(np.hypot(p[:, 0] - pose[0], p[:, 1] - pose[1])))
+        j = min(len(p) - 1, int(np.searchsorted(self.controller._cum, self.controller._cum[i] + 0.5)))
+        rc = self.cfg.recovery
+        obs = esc.gather_obstacles(self.local_costmap, pose[0], pose[1], rc.escape_reach, self._scan_pts)
+        return esc.blocked_toward(self.cfg.controller.footprint.polygon, pose, obs,
+                                  (p[j, 0] - pose[0], p[j, 1] - pose[1]), rc.escape_margin)
+
+    def _recover(self, rec: GoalRecord, now: float, pose: Pose2D, why: str, prefer: str | None = None) -> Command:
+        beh = self.recovery.begin(now, pose, prefer)
         if beh is None:
             self._finish(rec, FAILED, f"{why}; gave up after {rec.recoveries} recoveries", now)
             return self._zero(rec)
@@ -370,6 +390,8 @@ class Navigator:
         self._last_plan = -math.inf
         self._force_replan = False
         self._blocked_since: float | None = None
+        self._last_cmd_speed: float | None = None
+        self._last_remaining: float | None = None
         self._paused = False
 
     def _finish(self, rec: GoalRecord, state: str, detail: str, now: float) -> None:

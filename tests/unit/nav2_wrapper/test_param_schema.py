@@ -97,7 +97,7 @@ def test_wrong_types_name_the_key() -> None:
     with pytest.raises(ParamsError, match=r"GridBased\.unknown_cost: must be an integer"):
         load_params("sim", text=text.replace("unknown_cost: 200", "unknown_cost: 20.5"))
     with pytest.raises(ParamsError, match=r"recovery_behaviors: 'dance' is not one of"):
-        load_params("sim", text=text.replace("[clear_costmaps, spin, wait, backup]", "[spin, dance]"))
+        load_params("sim", text=text.replace("[escape, clear_costmaps, spin, wait, backup]", "[spin, dance]"))
 
 
 def test_unknown_keys_warn_and_compat_keys_are_listed() -> None:
