@@ -75,8 +75,11 @@ class ControllerConfig:
     latency_compensation: bool = param(
         True, "plan each command from where the base will be when it takes effect (the measured control latency "
         "ahead of the pose, at the measured twist); no effect where the simulator waits for the controller")
-    max_latency: float = param(0.3, "latency compensated at most (a larger measured one is capped here)", unit="s",
-                               ge=0, le=2.0)
+    max_latency: float = param(0.5, "latency predicted over at most (a larger measured one is capped here)",
+                               unit="s", ge=0, le=2.0)
+    max_blind_travel: float = param(
+        0.15, "distance the base may cover during one measured latency: above it the speed is cut to this / latency "
+        "(a starved machine then drives slower instead of blind)", unit="m", gt=0)
 
 
 @dataclass
@@ -94,6 +97,7 @@ class HolonomicController:
         self.cfg = cfg
         self.speed_limit = 1.0     # fraction of the max velocities (Nav2 speed limit as a percentage / 100)
         self.latency = 0.0         # s from the pose's stamp until a command takes effect (set by the process loop)
+        self.measured_latency = 0.0   # the same before the max_latency cap
         self.last_sent: tuple[float, float, float] | None = None   # the command the base is executing meanwhile
         self._points = self.cfg.footprint.outline_points(0.025)
         self.set_path(np.zeros((0, 2)))
@@ -111,8 +115,16 @@ class HolonomicController:
         """The control latency measured by the process running this controller (0: commands act at once) and
         the last command it sent (what the base executes until this step's command arrives; None: unknown,
         then the measured twist is assumed to hold)."""
-        self.latency = min(max(float(seconds), 0.0), self.cfg.max_latency) if math.isfinite(seconds) else 0.0
+        self.measured_latency = max(float(seconds), 0.0) if math.isfinite(seconds) else 0.0
+        self.latency = min(self.measured_latency, self.cfg.max_latency)
         self.last_sent = last_sent
+
+    def latency_speed_fraction(self) -> float:
+        """The speed-limit fraction that keeps speed × measured latency within ``max_blind_travel`` (1: no cut)."""
+        c = self.cfg
+        if not c.latency_compensation or self.measured_latency <= 0.0:
+            return 1.0
+        return min(1.0, c.max_blind_travel / (self.measured_latency * max(c.max_vel_x, c.max_vel_y)))
 
     def acting_pose(self, pose: Pose2D, vel: tuple[float, float, float]) -> Pose2D:
         """Where the base will be when a command computed now takes effect: ``pose`` carried on over the
@@ -152,8 +164,15 @@ class HolonomicController:
                 goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
         """One control step: pose in the costmap frame, vel = measured body (vx, vy, wz), dt since last step.
 
-        The command is chosen and collision-checked from :meth:`acting_pose`, where it will act."""
-        return self._compute(self.acting_pose(pose, vel), vel, goal, costmap, dt, xy_reached)
+        The command is chosen and collision-checked from :meth:`acting_pose`, where it will act, and with a long
+        latency under a speed limit that keeps the distance driven blind within ``max_blind_travel``."""
+        acting = self.acting_pose(pose, vel)
+        limit = self.speed_limit
+        self.speed_limit = limit * self.latency_speed_fraction()
+        try:
+            return self._compute(acting, vel, goal, costmap, dt, xy_reached)
+        finally:
+            self.speed_limit = limit
 
     def _compute(self, pose: Pose2D, vel: tuple[float, float, float],
                  goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:

@@ -102,6 +102,7 @@ def test_latency_is_capped_and_can_be_switched_off():
     ctl = HolonomicController(ControllerConfig(footprint=FP, max_latency=0.25))
     ctl.set_latency(0.9)
     assert ctl.latency == 0.25
+    assert ctl.measured_latency == 0.9
     ctl.set_latency(float("nan"))
     assert ctl.latency == 0.0
     off = HolonomicController(ControllerConfig(footprint=FP, latency_compensation=False))
@@ -159,3 +160,28 @@ def test_mppi_with_late_commands_reaches_the_goal_without_contact():
                                       goal, delay=0.25)
     assert reached
     assert contacts == 0
+
+
+@pytest.mark.parametrize("kind", ["pursuit", "mppi"])
+def test_a_long_latency_slows_the_base_to_the_blind_travel_budget(kind):
+    """At 1 s of latency and a 0.15 m budget the base may go 0.15 m/s; at 0.2 s the full 0.5 m/s."""
+    grid, start, goal = CORRIDOR
+    cm = _costmap(grid)
+    path = GlobalPlanner().plan(cm, start[:2], goal[:2]).path
+    speeds = {}
+    for latency in (0.2, 1.0):
+        cfg = ControllerConfig(footprint=FP, max_blind_travel=0.15)
+        ctl = MppiController(cfg, MppiConfig(seed=2)) if kind == "mppi" else HolonomicController(cfg)
+        ctl.set_path(path)
+        pose, vel = (1.5, 1.0, 0.0), (0.0, 0.0, 0.0)
+        top = 0.0
+        for _ in range(40):         # accelerate along the open start of the corridor
+            ctl.set_latency(latency, vel)
+            out = ctl.compute(pose, vel, goal, cm, 0.05)
+            vel = (out.vx, out.vy, out.wz)
+            pose = predict_pose(pose, vel, 0.05)
+            top = max(top, math.hypot(out.vx, out.vy))
+        speeds[latency] = top
+        assert ctl.speed_limit == 1.0       # the cut applies inside a step, not to the limit set from outside
+    assert speeds[1.0] <= 0.15 + 1e-6
+    assert speeds[0.2] > 0.3
