@@ -154,16 +154,21 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[dict[str, Any]] = []
     meta = {"rtf": args.rtf, "lidar_noise": args.lidar_noise, "python": platform.python_version(),
             "started": stamp, "command": " ".join(sys.argv)}
-    for i, (scene, goals) in enumerate(plan, 1):
-        print(f"[{i}/{len(plan)}] rbnx demo --scene {scene} --goals {goals} …", flush=True)
-        out = args.runs_dir / stamp / scene.replace(":", "_")
-        row = run_demo(scene, goals, out, args)
-        rows.append(row)
-        print(f"    {row['status']}: {row['goals_succeeded']}/{row['goals_planned']} goals, {row['contacts']} contacts"
-              + (f" ({', '.join(row['touched'])})" if row["touched"] else "") + f", {row['wall_s']:.0f} s wall"
-              + (f" — {row['reason']}" if row.get("reason") else ""), flush=True)
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps({**meta, "complete": i == len(plan), "rows": rows}, indent=2) + "\n")
+    try:
+        for i, (scene, goals) in enumerate(plan, 1):
+            print(f"[{i}/{len(plan)}] rbnx demo --scene {scene} --goals {goals} …", flush=True)
+            row = run_demo(scene, goals, args.runs_dir / stamp / scene.replace(":", "_"), args)
+            rows.append(row)
+            print(f"    {row['status']}: {row['goals_succeeded']}/{row['goals_planned']} goals, {row['contacts']} "
+                  "contacts" + (f" ({', '.join(row['touched'])})" if row["touched"] else "")
+                  + f", {row['wall_s']:.0f} s wall" + (f" — {row['reason']}" if row.get("reason") else ""), flush=True)
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            args.out.write_text(json.dumps({**meta, "complete": i == len(plan), "rows": rows}, indent=2) + "\n")
+    except KeyboardInterrupt:
+        print("\ninterrupted: the running demo was stopped; the table shows the finished ones", flush=True)
+        if rows:
+            print_table(rows)
+        return 130
     print()
     print_table(rows)
     print(f"wrote {args.out}")
