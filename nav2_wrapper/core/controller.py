@@ -79,7 +79,8 @@ class ControllerConfig:
                                unit="s", ge=0, le=2.0)
     max_blind_travel: float = param(
         0.15, "distance the base may cover during one measured latency: above it the speed is cut to this / latency "
-        "(a starved machine then drives slower instead of blind)", unit="m", gt=0)
+        "(a starved machine then drives slower instead of blind), not below regulated_linear_scaling_min_speed",
+        unit="m", gt=0)
 
 
 @dataclass
@@ -120,11 +121,15 @@ class HolonomicController:
         self.last_sent = last_sent
 
     def latency_speed_fraction(self) -> float:
-        """The speed-limit fraction that keeps speed × measured latency within ``max_blind_travel`` (1: no cut)."""
+        """The speed-limit fraction that keeps speed × measured latency within ``max_blind_travel`` (1: no cut),
+        but never below ``regulated_linear_scaling_min_speed``: the cut multiplies with the approach and
+        obstacle slow-downs, and a base crawling below that floor fails the progress check instead."""
         c = self.cfg
         if not c.latency_compensation or self.measured_latency <= 0.0:
             return 1.0
-        return min(1.0, c.max_blind_travel / (self.measured_latency * max(c.max_vel_x, c.max_vel_y)))
+        vmax = max(c.max_vel_x, c.max_vel_y)
+        floor = min(1.0, c.regulated_linear_scaling_min_speed / vmax)
+        return max(floor, min(1.0, c.max_blind_travel / (self.measured_latency * vmax)))
 
     def acting_pose(self, pose: Pose2D, vel: tuple[float, float, float]) -> Pose2D:
         """Where the base will be when a command computed now takes effect: ``pose`` carried on over the

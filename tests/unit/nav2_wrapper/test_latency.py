@@ -185,3 +185,11 @@ def test_a_long_latency_slows_the_base_to_the_blind_travel_budget(kind):
         assert ctl.speed_limit == 1.0       # the cut applies inside a step, not to the limit set from outside
     assert speeds[1.0] <= 0.15 + 1e-6
     assert speeds[0.2] > 0.3
+
+
+def test_the_latency_speed_cut_stops_at_the_regulation_floor():
+    ctl = HolonomicController(ControllerConfig(footprint=FP, max_blind_travel=0.15,
+                                               regulated_linear_scaling_min_speed=0.15))
+    for latency, fraction in ((0.1, 1.0), (0.3, 1.0), (0.4, 0.75), (1.0, 0.3), (5.0, 0.3)):
+        ctl.set_latency(latency)
+        assert ctl.latency_speed_fraction() == pytest.approx(fraction)
