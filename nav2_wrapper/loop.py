@@ -29,6 +29,7 @@ from nav2_wrapper.core import GoalRecord, Navigator
 from nav2_wrapper.core.grace import FAILED as GRACE_FAILED
 from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
 from nav2_wrapper.core.grace import InputGrace
+from nav2_wrapper.core.latency import LatencyEstimate
 from nav2_wrapper.core.navigator import FAILED, PENDING, RUNNING, TERMINAL
 from nav2_wrapper.core.warmup import ready as kernels_ready
 from nav2_wrapper.core.warmup import wait_finished as kernels_wait
@@ -48,6 +49,7 @@ log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
 SELF_FREEZE_S = 1.0  # wall s after this process was frozen during which writers' liveliness losses are not trusted
 WATCH_PERIOD_S = 1.0  # wall s between looks at the atlas (TERMINATED notices, re-registrations)
+LATENCY_LOG_S = 30.0  # clock s between the control-latency lines in the log while driving
 
 
 @dataclass
@@ -74,6 +76,7 @@ class NavLoop:
         self._state: RobotState | None = None
         self._tf_bad_since: float | None = None
         self._moving = False          # the last published command was non-zero
+        self._sent = (0.0, 0.0, 0.0)  # the last published command: the base executes it until the next arrives
         self._clock_last = -math.inf
         self._clock_wall = time.monotonic()
         self._paused = False
@@ -81,6 +84,9 @@ class NavLoop:
         self._last_step_wall = time.monotonic()
         self._thawed_at = -math.inf
         self._spans = GoalSpans.maybe(cfg.frames.map)  # None unless tracing is on
+        self.latency = LatencyEstimate()
+        self._latency_seen: list[tuple[float, float]] = []   # (pose age, expected latency) since the last log line
+        self._latency_logged = -math.inf
         self._thread = threading.Thread(target=self._run, name="nav-loop", daemon=True)
         self._watch = threading.Thread(target=self._watch_upstream, name="nav-upstream-watch", daemon=True)
 
@@ -269,6 +275,7 @@ class NavLoop:
         with contextlib.suppress(RuntimeError):  # closed during teardown
             self.pubs.cmd_vel.publish(twist(0.0, 0.0, 0.0))
         self._moving = False
+        self._sent = (0.0, 0.0, 0.0)
 
     # ---- the loop ----------------------------------------------------------------------------------
     def _run(self) -> None:
@@ -437,21 +444,42 @@ class NavLoop:
             self._state = state
             self.apply_speed()
             scan = self.inputs.core_scan(scan_msg, state.pose) if scan_msg is not None else None
+            expected = self.latency.expected(state.tf_age)
+            self.nav.controller.set_latency(expected, self._sent)
             cmd = self.nav.tick(now, state.pose, state.vel, grid, scan[0] if scan else None,
                                 scan[1] if scan else None)
             if live:
                 if self._degraded and rec.state == RUNNING:
                     rec.detail = f"{rec.detail}; degraded: {self._degraded}"
                 self._publish_cmd(rec, cmd.vx, cmd.vy, cmd.wz)
+                self._note_latency(now, state.tf_age, expected)
                 if rec.state in TERMINAL:
                     self.speed.run_ended(rec.run_id)
             self._publish_plan(now)
             self._sync_journal()
 
+    def _note_latency(self, now: float, pose_age: float, expected: float) -> None:
+        """After a driving tick's command went out: its duration in clock time feeds the latency estimate
+        (a tick at rtf 3 costs three times its wall time in sim time); a summary line now and then."""
+        self.latency.add_tick(self.inputs.clock.now() - now)
+        self._latency_seen.append((pose_age, expected))
+        if now - self._latency_logged < LATENCY_LOG_S:
+            return
+        if self._latency_seen and math.isfinite(self._latency_logged):
+            ages = sorted(a for a, _ in self._latency_seen)
+            exp = sorted(e for _, e in self._latency_seen)
+            log.info("control latency over %d ticks: pose age median %.0f ms, p90 %.0f ms; estimated latency median "
+                     "%.0f ms, p90 %.0f ms, max %.0f ms (clock time)", len(ages), 1e3 * ages[len(ages) // 2],
+                     1e3 * ages[int(0.9 * len(ages))], 1e3 * exp[len(exp) // 2], 1e3 * exp[int(0.9 * len(exp))],
+                     1e3 * exp[-1])
+        self._latency_seen.clear()
+        self._latency_logged = now
+
     def _publish_cmd(self, rec: GoalRecord, vx: float, vy: float, wz: float) -> None:
         if rec.state in (PENDING, RUNNING) or self._moving:
             self.pubs.cmd_vel.publish(twist(vx, vy, wz))
             self._moving = bool(vx or vy or wz)
+            self._sent = (vx, vy, wz)
 
     def _publish_plan(self, now: float) -> None:
         path = self.nav.path

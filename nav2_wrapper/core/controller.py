@@ -26,6 +26,7 @@ from robonix_common.params import param
 from .costmap import Costmap
 from .costs import LETHAL, NO_INFORMATION, distance_from_cost
 from .footprint import Footprint
+from .latency import mean_twist, predict_pose
 
 
 @dataclass
@@ -71,6 +72,15 @@ class ControllerConfig:
     passage_lookahead: float = param(1.0, "path searched for a narrow passage to line the body up with", unit="m",
                                      ge=0)
     sim_dt: float = param(0.1, "coarse step of the forward simulation", unit="s", gt=0)
+    latency_compensation: bool = param(
+        True, "plan each command from where the base will be when it takes effect (the measured control latency "
+        "ahead of the pose, at the measured twist); no effect where the simulator waits for the controller")
+    max_latency: float = param(0.5, "latency predicted over at most (a larger measured one is capped here)",
+                               unit="s", ge=0, le=2.0)
+    max_blind_travel: float = param(
+        0.15, "distance the base may cover during one measured latency: above it the speed is cut to this / latency "
+        "(a starved machine then drives slower instead of blind), not below regulated_linear_scaling_min_speed",
+        unit="m", gt=0)
 
 
 @dataclass
@@ -87,6 +97,9 @@ class HolonomicController:
     def __init__(self, cfg: ControllerConfig) -> None:
         self.cfg = cfg
         self.speed_limit = 1.0     # fraction of the max velocities (Nav2 speed limit as a percentage / 100)
+        self.latency = 0.0         # s from the pose's stamp until a command takes effect (set by the process loop)
+        self.measured_latency = 0.0   # the same before the max_latency cap
+        self.last_sent: tuple[float, float, float] | None = None   # the command the base is executing meanwhile
         self._points = self.cfg.footprint.outline_points(0.025)
         self.set_path(np.zeros((0, 2)))
 
@@ -98,6 +111,36 @@ class HolonomicController:
             self.speed_limit = min(limit, 100.0) / 100.0
         else:
             self.speed_limit = min(1.0, limit / max(self.cfg.max_vel_x, self.cfg.max_vel_y))
+
+    def set_latency(self, seconds: float, last_sent: tuple[float, float, float] | None = None) -> None:
+        """The control latency measured by the process running this controller (0: commands act at once) and
+        the last command it sent (what the base executes until this step's command arrives; None: unknown,
+        then the measured twist is assumed to hold)."""
+        self.measured_latency = max(float(seconds), 0.0) if math.isfinite(seconds) else 0.0
+        self.latency = min(self.measured_latency, self.cfg.max_latency)
+        self.last_sent = last_sent
+
+    def latency_speed_fraction(self) -> float:
+        """The speed-limit fraction that keeps speed × measured latency within ``max_blind_travel`` (1: no cut),
+        but never below ``regulated_linear_scaling_min_speed``: the cut multiplies with the approach and
+        obstacle slow-downs, and a base crawling below that floor fails the progress check instead."""
+        c = self.cfg
+        if not c.latency_compensation or self.measured_latency <= 0.0:
+            return 1.0
+        vmax = max(c.max_vel_x, c.max_vel_y)
+        floor = min(1.0, c.regulated_linear_scaling_min_speed / vmax)
+        return max(floor, min(1.0, c.max_blind_travel / (self.measured_latency * vmax)))
+
+    def acting_pose(self, pose: Pose2D, vel: tuple[float, float, float]) -> Pose2D:
+        """Where the base will be when a command computed now takes effect: ``pose`` carried on over the
+        latency by the twist the base has meanwhile (its measured twist ramping at the acceleration limits
+        toward the last command sent); ``pose`` itself when compensation is off or there is no latency."""
+        if not self.cfg.latency_compensation or self.latency <= 0.0:
+            return pose
+        c = self.cfg
+        twist = vel if self.last_sent is None else mean_twist(
+            vel, self.last_sent, (c.acc_lim_x, c.acc_lim_y, c.acc_lim_theta), self.latency)
+        return predict_pose((float(pose[0]), float(pose[1]), float(pose[2])), twist, self.latency)
 
     def set_path(self, path: NDArray[np.float64]) -> None:
         self.path = np.asarray(path, dtype=float).reshape(-1, 2)
@@ -124,7 +167,20 @@ class HolonomicController:
 
     def compute(self, pose: Pose2D, vel: tuple[float, float, float],
                 goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
-        """One control step: pose in the costmap frame, vel = measured body (vx, vy, wz), dt since last step."""
+        """One control step: pose in the costmap frame, vel = measured body (vx, vy, wz), dt since last step.
+
+        The command is chosen and collision-checked from :meth:`acting_pose`, where it will act, and with a long
+        latency under a speed limit that keeps the distance driven blind within ``max_blind_travel``."""
+        acting = self.acting_pose(pose, vel)
+        limit = self.speed_limit
+        self.speed_limit = limit * self.latency_speed_fraction()
+        try:
+            return self._compute(acting, vel, goal, costmap, dt, xy_reached)
+        finally:
+            self.speed_limit = limit
+
+    def _compute(self, pose: Pose2D, vel: tuple[float, float, float],
+                 goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
         c = self.cfg
         x, y, th = (float(v) for v in pose)
         if len(self.path) == 0:

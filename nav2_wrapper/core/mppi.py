@@ -79,12 +79,12 @@ class MppiController(HolonomicController):
         if hasattr(self, "_u"):
             self._u[:] = 0.0
 
-    def compute(self, pose: Pose2D, vel: Pose2D, goal: Pose2D, costmap: Costmap, dt: float,
-                xy_reached: bool = False) -> ControlOutput:
-        """One control step (same contract as the pursuit controller's)."""
+    def _compute(self, pose: Pose2D, vel: Pose2D, goal: Pose2D, costmap: Costmap, dt: float,
+                 xy_reached: bool = False) -> ControlOutput:
+        """One control step from the pose where the command will act (see ``HolonomicController.compute``)."""
         if len(self.path) == 0 or xy_reached:
             # the final turn in place is the pursuit's job: nothing to predict there
-            return super().compute(pose, vel, goal, costmap, dt, xy_reached)
+            return super()._compute(pose, vel, goal, costmap, dt, xy_reached)
         i = self._closest(pose[0], pose[1])
         remaining = self.remaining(pose)
         target = self._heading_target(i, pose, goal, costmap)
@@ -92,7 +92,7 @@ class MppiController(HolonomicController):
         cand = np.array([cmd])
         if not self.trajectory_hits(cand, pose, costmap)[0]:
             return ControlOutput(*cmd, False, remaining, "mppi")
-        fallback = super().compute(pose, vel, goal, costmap, dt, xy_reached)
+        fallback = super()._compute(pose, vel, goal, costmap, dt, xy_reached)
         self._u[:] = 0.0
         fallback.detail = "mppi fallback"
         return fallback

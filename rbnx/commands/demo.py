@@ -28,6 +28,7 @@ from rbnx.demo.live import DemoLive
 from rbnx.demo.record import Recorder, render_map
 from rbnx.demo.report import GoalResult, LiveLine, goals_exit_code, print_table, write_json
 from rbnx.demo.rpc import DemoRpc
+from rbnx.demo.variant import write_variant
 from robonix_nav_data import resources
 
 DEFAULT_DEPLOY = Path("examples") / "sim" / "deploy.yaml"
@@ -47,6 +48,9 @@ def register(sub: Any) -> None:
     d.add_argument("--deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
     d.add_argument("--timeout-per-goal", type=float, default=180.0, help="wall seconds per goal (default 180)")
     d.add_argument("--boot-timeout", type=float, default=120.0, help="wall seconds to come up (default 120)")
+    d.add_argument("--lidar-noise", type=float, nargs=2, metavar=("STD_M", "DROPOUT"),
+                   help="simulated lidar range noise (m, Gaussian) and per-beam dropout probability, e.g. 0.03 0.05 "
+                        "(default: the robot description's)")
     d.add_argument("--record", action="store_true", help="record the run to OUT/run.mcap (MCAP, ROS 2 CDR)")
     d.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
                    help="serve the live dashboard on 127.0.0.1:PORT (default 8765)")
@@ -119,6 +123,10 @@ def _check_args(args: argparse.Namespace) -> tuple[Path, str, Path]:
         v = getattr(args, name)
         if not (math.isfinite(v) and v > 0):
             raise UsageError(f"--{name.replace('_', '-')}: must be > 0, got {v}")
+    if args.lidar_noise is not None:
+        std, drop = args.lidar_noise
+        if not (math.isfinite(std) and std >= 0 and 0 <= drop <= 1):
+            raise UsageError(f"--lidar-noise: need STD_M >= 0 and 0 <= DROPOUT <= 1, got {std:g} {drop:g}")
     if args.dashboard is not None and not 0 <= args.dashboard <= 65535:
         raise UsageError(f"--dashboard: port must be 0..65535, got {args.dashboard}")
     deploy = resolve_deploy(args.deploy)
@@ -182,6 +190,13 @@ def run(args: argparse.Namespace) -> int:
     except UsageError as exc:
         print(f"rbnx demo: {exc}", file=sys.stderr)
         return 2
+    if args.lidar_noise is not None:
+        try:
+            deploy_path = write_variant(deploy_path, out, {"lidar_noise": {"noise_std": args.lidar_noise[0],
+                                                                           "dropout_prob": args.lidar_noise[1]}})
+        except ValueError as exc:
+            print(f"rbnx demo: --lidar-noise: {exc}", file=sys.stderr)
+            return 2
     env = dict(os.environ)
     env.update(RBNX_SIM_SCENE=scene, RBNX_SIM_RTF=f"{args.rtf:g}", PYTHONUNBUFFERED="1",
                RBNX_STATE_DIR=str(out / "state"))
@@ -203,7 +218,8 @@ def run(args: argparse.Namespace) -> int:
     goals: list[Goal] = []
     summary: dict[str, Any] = {"success": False, "scene": scene, "rtf": args.rtf, "seed": args.seed,
                                "deploy": str(deploy_path), "ros_domain_id": domain, "out": str(out),
-                               "logs": str(boot.log_dir), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+                               "lidar_noise": args.lidar_noise, "logs": str(boot.log_dir),
+                               "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     code, t_start = 1, time.monotonic()
     rpc: DemoRpc | None = None
     rec: Recorder | None = None

@@ -67,12 +67,33 @@ def test_mppi_section_builds_the_mppi_controller() -> None:
     assert isinstance(Navigator(cfg).controller, MppiController)
 
 
-def test_pursuit_stays_the_profiles_controller() -> None:
-    cfg = load_params("sim").config
+PURSUIT_BLOCK = """    FollowPath:
+      plugin: "robonix_nav::HolonomicPursuitController"
+      max_vel_x: 0.4
+      max_vel_theta: 1.2
+      desired_linear_vel: 0.4
+"""
+
+
+@pytest.mark.parametrize("profile", ["sim", "slam", "default"])
+def test_mppi_is_the_profiles_controller(profile: str) -> None:
+    loaded = load_params(profile)
+    cfg = loaded.config
+    assert cfg.mppi is not None
+    assert isinstance(Navigator(cfg).controller, MppiController)
+    assert not loaded.warnings
+    assert not any(".FollowPath." in u for u in loaded.unused)      # every controller key is read
+    # the profile's limits reach the controller under MPPI's names (vx_max ... az_max)
+    assert cfg.controller.max_vel_x == cfg.controller.desired_linear_vel
+
+
+def test_pursuit_stays_selectable() -> None:
+    cfg = load_params("sim", text=_with_controller(PURSUIT_BLOCK)).config
     assert cfg.mppi is None
     controller = Navigator(cfg).controller
     assert isinstance(controller, HolonomicController)
     assert not isinstance(controller, MppiController)
+    assert (cfg.controller.max_vel_x, cfg.controller.max_vel_theta) == (0.4, 1.2)
 
 
 @pytest.mark.parametrize(("old", "new", "needle"), [
