@@ -73,8 +73,10 @@ class ProgressCheckerConfig:
         "not realising its command) before a recovery", unit="s", gt=0)
     blocked_speed: float = param(0.03, "below this measured speed the robot counts as not moving", unit="m/s",
                                  gt=0)
-    blocked_min_command: float = param(0.08, "commanded speed that must be realised: a robot commanded at least "
-                                       "this that does not move is blocked", unit="m/s", gt=0)
+    blocked_min_command: float = param(
+        0.04, "commanded speed that must be realised: a robot commanded at least this (mean over the last half "
+        "second: MPPI's commands from standstill hover around 0.05 m/s and dip below it) that does not move is "
+        "blocked", unit="m/s", gt=0)
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,7 @@ class ProgressChecker:
         self._rem0: float | None = None
         self._best_rem: float | None = None
         self._hist: list[tuple[float, float, float]] = []
+        self._cmds: list[tuple[float, float]] = []
         self._blocked_since: float | None = None
 
     def check(self, now: float, pose: Pose2D) -> bool:
@@ -122,13 +125,25 @@ class ProgressChecker:
             return None
         return math.hypot(pose[0] - x, pose[1] - y) / (now - t)
 
+    def _mean_command(self, now: float, command: float | None) -> float | None:
+        """Mean commanded speed over the last half second: a sampling controller's single commands jitter."""
+        if command is None:
+            return None
+        self._cmds.append((now, command))
+        while len(self._cmds) > 1 and self._cmds[0][0] < now - 0.5:
+            self._cmds.pop(0)
+        return sum(v for _, v in self._cmds) / len(self._cmds)
+
     def _blocked(self, now: float, speed: float | None, command: float | None, pressed: bool) -> str | None:
         c = self.cfg
+        command = self._mean_command(now, command)
         why = None
         if speed is not None and speed < c.blocked_speed:
             if pressed:
                 why = "pressed against an obstacle toward the path"
-            elif command is not None and command >= c.blocked_min_command:
+            # Hysteresis: once counting, a jittering command may dip to half the threshold without a restart.
+            elif command is not None and command >= c.blocked_min_command * (
+                    0.5 if self._blocked_since is not None else 1.0):
                 why = f"commanded {command:.2f} m/s but moving {speed:.2f} m/s"
         if why is None:
             self._blocked_since = None
