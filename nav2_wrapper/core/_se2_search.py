@@ -96,7 +96,7 @@ def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape
     plane = rows * cols
     g[:] = np.inf
     parent[:] = -1
-    sb, sr, sc = start // plane, (start % plane) // cols, start % cols
+    sr, sc = (start % plane) // cols, start % cols
     g[start] = 0.0
     heap = [(weight * h[sr, sc], np.int64(start))]
     closed = np.zeros(bins * plane, np.bool_)

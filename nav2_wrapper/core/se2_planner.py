@@ -132,7 +132,8 @@ class Se2Planner:
         pad = max(k[0] for k in kernels)
         rows, cols = costmap.shape
         lethal = np.zeros((win.r1 - win.r0 + 2 * pad, win.c1 - win.c0 + 2 * pad), np.uint8)
-        sr0, sr1, sc0, sc1 = max(0, win.r0 - pad), min(rows, win.r1 + pad), max(0, win.c0 - pad), min(cols, win.c1 + pad)
+        sr0, sr1 = max(0, win.r0 - pad), min(rows, win.r1 + pad)
+        sc0, sc1 = max(0, win.c0 - pad), min(cols, win.c1 + pad)
         lethal[sr0 - (win.r0 - pad):sr1 - (win.r0 - pad), sc0 - (win.c0 - pad):sc1 - (win.c0 - pad)] = (
             costmap.costs[sr0:sr1, sc0:sc1] == LETHAL)
         out = np.empty((len(kernels), *win.shape), np.bool_)
