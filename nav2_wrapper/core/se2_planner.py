@@ -40,12 +40,15 @@ class Se2PlannerConfig:
     enabled: bool = param(True, "run the (x, y, heading) search when no heading fits somewhere on the 2D path")
     bins: int = param(36, "heading bins over a half turn (the rectangle is symmetric under a half turn)",
                       ge=4, le=180)
-    margin: float = param(0.02, "clearance the footprint keeps from lethal cells on the SE(2) path", unit="m",
-                          ge=0, le=0.5)
+    margin: float = param(0.01, "clearance the footprint keeps from lethal cells on the SE(2) path, on top of "
+                                "the allowance for moves between lattice states (res/√2)", unit="m", ge=0, le=0.5)
     rotation_cost: float = param(
         0.5, "cost of turning one radian, in metres of travel (discourages needless turning)", unit="m/rad", ge=0)
-    window_margin: float = param(2.0, "the search window is the box around start, goal and 2D path grown by this",
+    window_margin: float = param(2.0, "the search window is the box around start, goal and 2D path grown by this "
+                                      "(doubled while the goal is cut off inside it, up to max_window_cells)",
                                  unit="m", ge=0)
+    max_window_cells: int = param(250_000, "the window is not grown beyond this many cells (memory: ~10 bytes "
+                                           "per cell and heading bin)", ge=1000)
     max_expansions: int = param(3_000_000, "the search gives up after expanding this many states", ge=1000)
     heuristic_weight: float = param(1.0, "weighted A* on the SE(2) lattice (1: cost-optimal)", ge=1.0)
     escape_radius: float = param(0.15, "how far from the start blocked states may be crossed (a body touching "
@@ -117,10 +120,18 @@ class Se2Planner:
         self.cfg = cfg
         self.half_len, self.half_wid = box_half_extents(footprint)
         self._kernels: dict[float, list[tuple[int, NDArray, NDArray]]] = {}
+        self._res = 0.0
+
+    def grow(self, res: float) -> float:
+        """How much the rectangle is grown for the collision grids: ``margin`` plus what makes the check hold
+        between lattice states too — every pose on a move between two cell centres lies within res/√2 of one
+        end (a diagonal's midpoint), and a turn by one bin moves a corner at most r·dθ/2 from either end."""
+        sweep = max(res / math.sqrt(2.0), math.hypot(self.half_len, self.half_wid) * math.pi / self.cfg.bins / 2)
+        return self.cfg.margin + sweep
 
     def _kernel_set(self, res: float) -> list[tuple[int, NDArray, NDArray]]:
         if res not in self._kernels:
-            m = self.cfg.margin
+            m = self.grow(res)
             self._kernels[res] = [kernel_rows(self.half_len + m, self.half_wid + m, b * math.pi / self.cfg.bins, res)
                                   for b in range(self.cfg.bins)]
         return self._kernels[res]
@@ -143,9 +154,23 @@ class Se2Planner:
             _se2_search.dilate_rows(sub, p, lo, hi, out[b])
         return out
 
-    def _window(self, costmap: Costmap, pts: NDArray[np.float64]) -> _Window:
+    def _heuristic(self, blocked: NDArray[np.bool_], factor: NDArray[np.float32], start: tuple[int, int],
+                   goal: tuple[int, int], k: int) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """(2D cost to go over cells free at some heading, the goal cells); the cells near the start count as
+        free (the escape zone), so a start touching a speckle still has a finite estimate."""
+        esc = self.cfg.escape_radius / (self._res or 1.0)
+        rr, cc = np.mgrid[0:blocked.shape[1], 0:blocked.shape[2]]
+        near_start = (rr - start[0]) ** 2 + (cc - start[1]) ** 2 <= esc * esc
+        passable = ~blocked.all(axis=0) | near_start
+        goals = self._goal_cells(passable, goal[0], goal[1], k)
+        h = np.full(passable.shape, np.inf)
+        if len(goals):
+            _se2_search.cost_to_go(passable, factor, goals, h)
+        return h, goals
+
+    def _window(self, costmap: Costmap, pts: NDArray[np.float64], margin: float) -> _Window:
         col, row = costmap.world_to_cell(pts[:, 0], pts[:, 1])
-        m = int(math.ceil(self.cfg.window_margin / costmap.resolution))
+        m = int(math.ceil(margin / costmap.resolution))
         rows, cols = costmap.shape
         return _Window(max(0, int(row.min()) - m), min(rows, int(row.max()) + m + 1),
                        max(0, int(col.min()) - m), min(cols, int(col.max()) + m + 1))
@@ -158,6 +183,8 @@ class Se2Planner:
         ``guide`` the 2D path whose neighbourhood is searched too."""
         t0 = time.perf_counter()
         cfg, res = self.cfg, costmap.resolution
+        self._res = res
+        esc = cfg.escape_radius / res
         pts = np.array([start[:2], goal[:2]], dtype=float)
         if guide is not None and len(guide):
             pts = np.vstack([pts, guide])
@@ -165,27 +192,29 @@ class Se2Planner:
         gcol, grow = (int(v) for v in costmap.world_to_cell(goal[0], goal[1]))
         if not (costmap.in_bounds(scol, srow) and costmap.in_bounds(gcol, grow)):
             return Se2Plan(False, reason="start or goal is off the costmap")
-        win = self._window(costmap, pts)
-        blocked = self.blocked_grids(costmap, win)
-        factor = self._factor(costmap, win, table)
-        sr, sc, gr, gc = srow - win.r0, scol - win.c0, grow - win.r0, gcol - win.c0
-        esc = cfg.escape_radius / res
-        rr, cc = np.mgrid[0:win.shape[0], 0:win.shape[1]]
-        near_start = (rr - sr) ** 2 + (cc - sc) ** 2 <= esc * esc
-        passable = ~blocked.all(axis=0) | near_start
-        goals = self._goal_cells(passable, gr, gc, int(math.floor(tolerance / res)))
-        if len(goals) == 0:
-            return Se2Plan(False, reason="no heading fits the footprint at or near the goal",
-                           seconds=time.perf_counter() - t0)
-        h = np.empty(win.shape)
-        _se2_search.cost_to_go(passable, factor, goals.astype(np.int64), h)
-        if not math.isfinite(h[sr, sc]):
-            return Se2Plan(False, reason="no footprint-feasible route: the goal is cut off at every heading",
-                           seconds=time.perf_counter() - t0)
+        margin = cfg.window_margin
+        while True:
+            win = self._window(costmap, pts, margin)
+            blocked = self.blocked_grids(costmap, win)
+            factor = self._factor(costmap, win, table)
+            sr, sc, gr, gc = srow - win.r0, scol - win.c0, grow - win.r0, gcol - win.c0
+            h, goals = self._heuristic(blocked, factor, (sr, sc), (gr, gc), int(math.floor(tolerance / res)))
+            if len(goals) == 0:
+                return Se2Plan(False, reason="no heading fits the footprint at or near the goal",
+                               seconds=time.perf_counter() - t0)
+            if math.isfinite(h[sr, sc]):
+                break
+            # cut off inside the window: a detour may lie outside it, so look wider while that is affordable
+            bigger = self._window(costmap, pts, 2 * margin + res)
+            whole = bigger.shape == win.shape
+            if whole or bigger.shape[0] * bigger.shape[1] > cfg.max_window_cells:
+                return Se2Plan(False, reason="no footprint-feasible route: the goal is cut off at every heading "
+                               f"within {margin:.1f} m of the 2D path", seconds=time.perf_counter() - t0)
+            margin = 2 * margin + res
         goal_mask = np.zeros(win.shape, np.bool_)
         goal_mask.flat[goals] = True
         n_states = blocked.size
-        g, parent = np.empty(n_states), np.empty(n_states, np.int64)
+        g, parent = np.empty(n_states, np.float32), np.empty(n_states, np.int32)
         sbin = int(round((start[2] % math.pi) / (math.pi / cfg.bins))) % cfg.bins
         s_state = (sbin * win.shape[0] + sr) * win.shape[1] + sc
         rot = cfg.rotation_cost * (math.pi / cfg.bins) / res     # metres → cells
