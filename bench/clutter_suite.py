@@ -3,8 +3,8 @@
     python bench/clutter_suite.py [--worlds 200] [--seeds 3] [--noise both|on|off] [--controller pursuit|mppi]
                                   [--only 41,74,94] [--jobs 2] [--out bench/results/clutter_suite.json]
 
-``--only`` drives just the listed indices of the ``--worlds`` generated ones (default: as many as the largest
-index needs), e.g. to rerun the hard worlds of a full run.
+``--only`` drives just the worlds of the listed generator seeds (the number in a world's name, ``clutter_41``),
+e.g. to rerun the failures of a full run without generating and proving all the worlds before them.
 
 Worlds come from :mod:`robonix_eval.clutter` (cellular automaton on a 0.15 m grid, fill drawn uniformly
 from 10–35 %, two smoothing passes; walls on three sides; start 1 m above the south wall, goal 10 m above
@@ -57,12 +57,25 @@ def make_worlds(n: int, margin: float, first_seed: int = 0) -> tuple[list[Clutte
     return worlds, rejected
 
 
-def run_one(job: tuple[dict, int, float, float, bool, str, float, int]) -> dict:
+def make_selected(seeds: list[int], margin: float) -> list[ClutterWorld]:
+    """The worlds of the given generator seeds (as ``make_worlds`` draws them); a seed whose draw the proof
+    rejects is an error, since ``make_worlds`` never uses it."""
+    worlds = []
+    for seed in seeds:
+        fill = float(np.random.default_rng(seed + 7_000_000).uniform(*FILL))
+        w = generate(seed, fill, margin=margin, survive=3)
+        if not w.passable:
+            raise SystemExit(f"clutter_suite: the draw of seed {seed} is not passable (make_worlds skips it)")
+        worlds.append(w)
+    return worlds
+
+
+def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
     """One crossing; runs in a worker process (everything it needs travels in ``job``)."""
     from hal_panda_mobile.sim import LidarNoise, OdomNoise
     from robonix_eval.pipeline import Pipeline, PipelineOptions
 
-    scene, seed, shortest, fill, noisy, controller, timeout, index = job
+    scene, seed, shortest, fill, noisy, controller, timeout = job
     if noisy:
         opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
     else:
@@ -74,7 +87,7 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float, int]) -> dict:
     gx, gy = scene["waypoints"]["goal"]
     res = pipe.navigate(gx, gy, math.pi / 2, timeout=timeout)
     cruise = pipe.params.config.controller.desired_linear_vel
-    return {"world": scene["name"], "index": index, "fill": fill, "seed": seed, "noise": noisy, "state": res.state,
+    return {"world": scene["name"], "fill": fill, "seed": seed, "noise": noisy, "state": res.state,
             "detail": res.detail, "collisions": res.collisions, "recoveries": res.recoveries,
             "success": res.succeeded and res.collisions == 0, "time": res.time,
             "shortest_lower_bound": shortest, "time_ratio": res.time / (shortest / cruise),
@@ -82,14 +95,14 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float, int]) -> dict:
             "se2_seconds": pipe.nav.footprint_planner.stats.seconds}
 
 
-def _indices(text: str) -> list[int]:
-    """``--only``'s world indices (empty: all)."""
+def _seeds(text: str) -> list[int]:
+    """``--only``'s world seeds (empty: all of ``--worlds``)."""
     try:
         out = [int(v) for v in text.split(",") if v.strip()]
     except ValueError as exc:
-        raise SystemExit(f"clutter_suite: --only takes comma-separated indices, got {text!r}") from exc
-    if any(i < 0 or i >= 10_000 for i in out):
-        raise SystemExit("clutter_suite: --only indices must be 0..9999")
+        raise SystemExit(f"clutter_suite: --only takes comma-separated seeds, got {text!r}") from exc
+    if any(i < 0 or i >= 1_000_000 for i in out):
+        raise SystemExit("clutter_suite: --only seeds must be 0..999999")
     return out
 
 
@@ -129,27 +142,26 @@ def main() -> None:
                     help="the sim profile's controller, or override it")
     ap.add_argument("--margin", type=float, default=0.05, help="m of clearance the passability proof demands")
     ap.add_argument("--timeout", type=float, default=120.0, help="s of sim time per crossing")
-    ap.add_argument("--only", default="", help="comma-separated world indices to run (of the generated worlds)")
+    ap.add_argument("--only", default="", help="comma-separated generator seeds of the worlds to run (clutter_<seed>)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "clutter_suite.json"))
     a = ap.parse_args()
     if not (1 <= a.worlds <= 10_000 and 1 <= a.seeds <= 100 and 1 <= a.jobs <= 64 and 0 <= a.margin <= 0.5):
         raise SystemExit("clutter_suite: --worlds 1..10000, --seeds 1..100, --jobs 1..64, --margin 0..0.5")
-    only = _indices(a.only)
+    only = _seeds(a.only)
     t0 = time.perf_counter()
-    worlds, rejected = make_worlds(max(a.worlds, max(only, default=-1) + 1), a.margin)
-    indexed = [(i, worlds[i]) for i in only] if only else list(enumerate(worlds))
+    worlds, rejected = (make_selected(only, a.margin), 0) if only else make_worlds(a.worlds, a.margin)
     print(f"{len(worlds)} passable worlds ({rejected} draws rejected by the proof) in {time.perf_counter() - t0:.0f} s",
           flush=True)
     noises = {"both": (True, False), "on": (True,), "off": (False,)}[a.noise]
-    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout, i)
-            for i, w in indexed for s in range(a.seeds) for n in noises]
+    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout)
+            for w in worlds for s in range(a.seeds) for n in noises]
     rows: list[dict] = []
     with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool:
         for row in pool.map(run_one, jobs):
             rows.append(row)
             if not row["success"]:
-                print(f"  #{row['index']} {row['world']} seed {row['seed']} noise {row['noise']}: {row['state']}, "
+                print(f"  {row['world']} seed {row['seed']} noise {row['noise']}: {row['state']}, "
                       f"{row['collisions']} contacts: {row['detail'][:80]}", flush=True)
             if len(rows) % 20 == 0:
                 ok = sum(r["success"] for r in rows)
