@@ -21,13 +21,13 @@ SQRT2 = math.sqrt(2.0)
 
 @njit(cache=True)
 def dilate_rows(lethal, pad, lo, hi, out):  # pragma: no cover - compiled
-    """``out[r, c]`` (rows × cols) = whether any lethal cell lies under the kernel centred at (r, c).
+    """``out[b, r, c]`` (bins × rows × cols) = whether any lethal cell lies under kernel ``b`` centred at (r, c).
 
-    ``lethal`` is the window padded by ``pad`` cells on every side; the kernel is convex, so row ``di``
-    (−pad … pad) of it is one interval of column offsets ``lo[di + pad] … hi[di + pad]`` (empty if lo > hi), and
-    each interval test is one difference of a row prefix sum: the cost is rows × cols × kernel rows, whatever
-    the number of obstacles."""
-    rows, cols = out.shape
+    ``lethal`` is the window padded by ``pad`` cells on every side; a kernel is convex, so its row ``di``
+    (−pad … pad) is one interval of column offsets ``lo[b, di + pad] … hi[b, di + pad]`` (empty if lo > hi), and
+    each interval test is one difference of a row prefix sum (computed once for all bins): the cost is
+    bins × rows × cols × kernel rows, whatever the number of obstacles."""
+    bins, rows, cols = out.shape
     prow, pcol = lethal.shape
     pre = np.zeros((prow, pcol + 1), np.int32)
     for r in range(prow):
@@ -35,18 +35,18 @@ def dilate_rows(lethal, pad, lo, hi, out):  # pragma: no cover - compiled
         for c in range(pcol):
             acc += lethal[r, c]
             pre[r, c + 1] = acc
-    for r in range(rows):
-        for c in range(cols):
-            hit = False
-            for k in range(2 * pad + 1):
-                a, b = lo[k], hi[k]
-                if a > b:
-                    continue
-                pr = r + k
-                if pre[pr, c + pad + b + 1] - pre[pr, c + pad + a] > 0:
-                    hit = True
-                    break
-            out[r, c] = hit
+    for b in range(bins):
+        for r in range(rows):
+            for c in range(cols):
+                hit = False
+                for k in range(2 * pad + 1):
+                    a, e = lo[b, k], hi[b, k]
+                    if a > e:
+                        continue
+                    if pre[r + k, c + pad + e + 1] - pre[r + k, c + pad + a] > 0:
+                        hit = True
+                        break
+                out[b, r, c] = hit
 
 
 @njit(cache=True)
@@ -98,7 +98,8 @@ def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape
     parent[:] = -1
     sr, sc = (start % plane) // cols, start % cols
     g[start] = 0.0
-    heap = [(weight * h[sr, sc], np.int64(start))]
+    hw = weight * (1.0 + 1e-6)       # a hair above weight: on equal f, the state nearer the goal pops first
+    heap = [(hw * h[sr, sc], np.int64(start))]
     closed = np.zeros(bins * plane, np.bool_)
     drs = (-1, -1, -1, 0, 0, 1, 1, 1)
     dcs = (-1, 0, 1, -1, 1, -1, 0, 1)
@@ -140,5 +141,5 @@ def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape
                 parent[t] = s
                 hv = h[nr, nc]
                 if math.isfinite(hv):
-                    heapq.heappush(heap, (ng + weight * hv, np.int64(t)))
+                    heapq.heappush(heap, (ng + hw * hv, np.int64(t)))
     return -1, expansions

@@ -1,8 +1,11 @@
 """Footprint-aware global planning: the 2D plan, checked for headings, with the SE(2) search as a fallback.
 
 The 2D planner is fast and right wherever the rectangle fits the path at some heading, which is nearly always;
-the heading assignment (``headings``) tells cheaply whether that is so. Only when some point of the 2D path has
-no heading at which the true footprint is clear does the (x, y, heading) lattice search run: a route through a
+the heading assignment (``headings``) tells cheaply whether that is so. It is run on the SE(2) search's own
+collision model — the footprint grown by the search's margin — not on the bare outline: a path the bare outline
+passes with millimetres to spare is one the robot wedges on (clutter world 41: the bare check accepts a 13 m
+route, the configuration-space proof's shortest route with 5 cm clearance is 15.4 m). Only when some point of
+the 2D path has no such heading does the (x, y, heading) lattice search run: a route through a
 gap the inscribed disc fits but the rectangle does not must be replaced by a different route, not by a keep-out
 patch on the same one. If the lattice search fails too (e.g. the map is still mostly unknown, or the window is
 too small), the 2D path is kept: the controller's own footprint checks and the recoveries still apply, and the
@@ -20,7 +23,7 @@ from robonix_common.geometry import Pose2D
 
 from .costmap import Costmap
 from .footprint import Footprint
-from .headings import HeadingConfig, assign_headings
+from .headings import HeadingConfig, headings_over, resample
 from .planner import GlobalPlanner, PlanResult
 from .se2_planner import Se2Plan, Se2Planner
 
@@ -46,8 +49,9 @@ class FootprintAwarePlanner:
     def __init__(self, planner: GlobalPlanner, footprint: Footprint) -> None:
         self.planner = planner
         self.se2 = Se2Planner(planner.cfg.se2, footprint)
-        self.headings_cfg = HeadingConfig()
-        self._outline = footprint.outline_points(self.headings_cfg.outline_spacing)
+        # the 2D path is checked with the SE(2) search's own collision model (grown footprint, same bins), at
+        # half the costmap cells' spacing of the usual heading assignment
+        self.headings_cfg = HeadingConfig(bins=planner.cfg.se2.bins, spacing=0.05)
         self.stats = FallbackStats()
 
     def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult) -> PlanResult:
@@ -56,7 +60,8 @@ class FootprintAwarePlanner:
         cfg = self.planner.cfg
         if not cfg.se2.enabled or not res.ok or len(res.path) < 2:
             return res
-        if assign_headings(res.path, costmap, self._outline, self.headings_cfg).feasible:
+        pts = resample(res.path, self.headings_cfg.spacing)
+        if headings_over(pts, self.se2.feasible_bins(costmap, pts), self.headings_cfg).feasible:
             return res
         plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
                              self.planner.traversal_table(), cfg.tolerance, guide=res.path)

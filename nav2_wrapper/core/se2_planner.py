@@ -147,11 +147,24 @@ class Se2Planner:
         sc0, sc1 = max(0, win.c0 - pad), min(cols, win.c1 + pad)
         lethal[sr0 - (win.r0 - pad):sr1 - (win.r0 - pad), sc0 - (win.c0 - pad):sc1 - (win.c0 - pad)] = (
             costmap.costs[sr0:sr1, sc0:sc1] == LETHAL)
-        out = np.empty((len(kernels), *win.shape), np.bool_)
+        lo_all = np.ones((len(kernels), 2 * pad + 1), np.int64)     # rows a kernel lacks stay empty (lo > hi)
+        hi_all = np.zeros((len(kernels), 2 * pad + 1), np.int64)
         for b, (p, lo, hi) in enumerate(kernels):
-            # every kernel is read from the same padded window: shift the rows/cols by pad - p
-            sub = lethal[pad - p:lethal.shape[0] - (pad - p), pad - p:lethal.shape[1] - (pad - p)]
-            _se2_search.dilate_rows(sub, p, lo, hi, out[b])
+            lo_all[b, pad - p:pad + p + 1], hi_all[b, pad - p:pad + p + 1] = lo, hi
+        out = np.empty((len(kernels), *win.shape), np.bool_)
+        _se2_search.dilate_rows(lethal, pad, lo_all, hi_all, out)
+        return out
+
+    def feasible_bins(self, costmap: Costmap, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """(N, bins): whether the grown footprint fits at each point (its cell) and bin heading — the same
+        collision model the search uses, so a 2D path that passes here needs no fallback. Points off the window
+        (there is none: it is built around them) or off the costmap count as fitting nowhere."""
+        win = self._window(costmap, points, 0.0)
+        blocked = self.blocked_grids(costmap, win)
+        col, row = costmap.world_to_cell(points[:, 0], points[:, 1])
+        inside = (row >= win.r0) & (row < win.r1) & (col >= win.c0) & (col < win.c1)
+        out = np.zeros((len(points), self.cfg.bins), np.bool_)
+        out[inside] = ~blocked[:, row[inside] - win.r0, col[inside] - win.c0].T
         return out
 
     def _heuristic(self, blocked: NDArray[np.bool_], factor: NDArray[np.float32], start: tuple[int, int],
