@@ -61,7 +61,11 @@ class FootprintAwarePlanner:
         if not cfg.se2.enabled or not res.ok or len(res.path) < 2:
             return res
         pts = resample(res.path, self.headings_cfg.spacing)
-        if headings_over(pts, self.se2.feasible_bins(costmap, pts), self.headings_cfg).feasible:
+        ok = self.se2.feasible_bins(costmap, pts)
+        # where the body is now it already fits (a grown-footprint overlap there is the margin, not a wedge):
+        # the search would only escape from it, so it is no reason to replace the plan
+        ok[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) <= cfg.se2.escape_radius] = True
+        if headings_over(pts, ok, self.headings_cfg).feasible:
             return res
         plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
                              self.planner.traversal_table(), cfg.tolerance, guide=res.path)
