@@ -14,6 +14,7 @@ from nav2_wrapper.core.footprint import Footprint
 from nav2_wrapper.core.footprint_planning import FootprintAwarePlanner
 from nav2_wrapper.core.headings import assign_headings
 from nav2_wrapper.core.mppi import MppiController
+from nav2_wrapper.core.navigator import RUNNING, NavConfig, Navigator
 from nav2_wrapper.core.planner import GlobalPlanner, PlannerConfig
 from nav2_wrapper.core.se2_planner import Se2Planner, Se2PlannerConfig, kernel_rows
 from robonix_common.grid import GridMap
@@ -179,3 +180,18 @@ def test_the_controllers_hold_the_planned_heading_and_keep_it_across_a_restart()
     assert ctl.path_headings is None
     with pytest.raises(ValueError, match="headings for"):
         ctl.set_path(plan.path, plan.headings[:-1])
+
+
+def test_the_navigator_plans_the_slot_route_and_hands_its_headings_to_the_controller() -> None:
+    cm = _world(slot=True)
+    grid = GridMap(np.where(cm.static == LETHAL, 100, 0).astype(np.int8), RES)
+    cfg = NavConfig.defaults(FOOTPRINT)
+    cfg.mppi = None
+    nav = Navigator(cfg)
+    nav.tick(0.0, START, grid=grid)
+    rec = nav.navigate(GOAL[0], GOAL[1], math.pi / 2, now=0.0)
+    nav.tick(0.05, START)
+    assert rec.state == RUNNING
+    assert nav.controller.path_headings is not None
+    assert nav.path[:, 0].min() < 2.0                                 # the slot, not the dogleg
+    assert nav.footprint_planner.stats.found == 1
