@@ -20,13 +20,14 @@ SQRT2 = math.sqrt(2.0)
 
 
 @njit(cache=True)
-def dilate_rows(lethal, pad, lo, hi, out):  # pragma: no cover - compiled
+def dilate_rows(lethal, pad, lo, hi, decided, out):  # pragma: no cover - compiled
     """``out[b, r, c]`` (bins × rows × cols) = whether any lethal cell lies under kernel ``b`` centred at (r, c).
 
     ``lethal`` is the window padded by ``pad`` cells on every side; a kernel is convex, so its row ``di``
     (−pad … pad) is one interval of column offsets ``lo[b, di + pad] … hi[b, di + pad]`` (empty if lo > hi), and
     each interval test is one difference of a row prefix sum (computed once for all bins): the cost is
-    bins × rows × cols × kernel rows, whatever the number of obstacles."""
+    bins × rows × cols × kernel rows, whatever the number of obstacles. Cells where ``decided[r, c]`` is 0 (free
+    at every heading) or 1 (blocked at every heading) are filled without the test; 2 means test."""
     bins, rows, cols = out.shape
     prow, pcol = lethal.shape
     pre = np.zeros((prow, pcol + 1), np.int32)
@@ -38,6 +39,9 @@ def dilate_rows(lethal, pad, lo, hi, out):  # pragma: no cover - compiled
     for b in range(bins):
         for r in range(rows):
             for c in range(cols):
+                if decided[r, c] != 2:
+                    out[b, r, c] = decided[r, c] == 1
+                    continue
                 hit = False
                 for k in range(2 * pad + 1):
                     a, e = lo[b, k], hi[b, k]

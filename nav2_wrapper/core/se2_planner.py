@@ -152,7 +152,21 @@ class Se2Planner:
         for b, (p, lo, hi) in enumerate(kernels):
             lo_all[b, pad - p:pad + p + 1], hi_all[b, pad - p:pad + p + 1] = lo, hi
         out = np.empty((len(kernels), *win.shape), np.bool_)
-        _se2_search.dilate_rows(lethal, pad, lo_all, hi_all, out)
+        _se2_search.dilate_rows(lethal, pad, lo_all, hi_all, self._decided(lethal, pad, costmap.resolution), out)
+        return out
+
+    def _decided(self, lethal: NDArray[np.uint8], pad: int, res: float) -> NDArray[np.uint8]:
+        """Per window cell: 0 free at every heading (the nearest lethal cell is beyond the grown rectangle's
+        circumscribed circle plus a cell's half diagonal), 1 blocked at every heading (a lethal cell centre lies
+        in its inscribed circle), 2 undecided. Most cells of a sparse map are 0, and the per-heading test then
+        runs only in the band around obstacles."""
+        from scipy.ndimage import distance_transform_edt
+
+        grow = self.grow(res)
+        dist = distance_transform_edt(lethal == 0)[pad:lethal.shape[0] - pad, pad:lethal.shape[1] - pad] * res
+        out = np.full(dist.shape, 2, np.uint8)
+        out[dist > math.hypot(self.half_len + grow, self.half_wid + grow) + res / math.sqrt(2.0) + 1e-9] = 0
+        out[dist <= self.half_wid + grow] = 1
         return out
 
     def feasible_bins(self, costmap: Costmap, points: NDArray[np.float64]) -> NDArray[np.bool_]:

@@ -195,3 +195,23 @@ def test_the_navigator_plans_the_slot_route_and_hands_its_headings_to_the_contro
     assert nav.controller.path_headings is not None
     assert nav.path[:, 0].min() < 2.0                                 # the slot, not the dogleg
     assert nav.footprint_planner.stats.found == 1
+
+
+@pytest.mark.parametrize("posts", [0, 45])
+def test_the_distance_shortcut_leaves_the_collision_grids_unchanged(posts: int,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """Cells decided from the distance transform (free or blocked at every heading) match the per-heading test."""
+    rng = np.random.default_rng(2)
+    g = np.zeros((100, 90), np.int8)
+    for _ in range(posts):
+        r, c = rng.integers(0, 97), rng.integers(0, 87)
+        g[r:r + 3, c:c + 3] = 100
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    cm.set_static_map(GridMap(g, RES))
+    planner = Se2Planner(Se2PlannerConfig(), FOOTPRINT)
+    win = planner._window(cm, np.array([[1.0, 1.0], [3.5, 4.0]]), 1.0)
+    fast = planner.blocked_grids(cm, win)
+    monkeypatch.setattr(planner, "_decided", lambda lethal, pad, res: np.full(
+        (lethal.shape[0] - 2 * pad, lethal.shape[1] - 2 * pad), 2, np.uint8))
+    assert np.array_equal(fast, planner.blocked_grids(cm, win))
+    assert fast.any() == (posts > 0)
