@@ -1,7 +1,7 @@
 """Navigation in clutter: generated post fields, each proven passable, crossed by the in-process stack.
 
     python bench/clutter_suite.py [--worlds 200] [--seeds 3] [--noise both|on|off] [--controller pursuit|mppi]
-                                  [--only 41,74,94] [--jobs 2] [--out bench/results/clutter_suite.json]
+                                  [--only 41,74,94] [--se2 on|off] [--jobs 2] [--out bench/results/clutter_suite.json]
 
 ``--only`` drives just the worlds of the listed generator seeds (the number in a world's name, ``clutter_41``),
 e.g. to rerun the failures of a full run without generating and proving all the worlds before them.
@@ -70,12 +70,12 @@ def make_selected(seeds: list[int], margin: float) -> list[ClutterWorld]:
     return worlds
 
 
-def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
+def run_one(job: tuple[dict, int, float, float, bool, str, float, bool]) -> dict:
     """One crossing; runs in a worker process (everything it needs travels in ``job``)."""
     from hal_panda_mobile.sim import LidarNoise, OdomNoise
     from robonix_eval.pipeline import Pipeline, PipelineOptions
 
-    scene, seed, shortest, fill, noisy, controller, timeout = job
+    scene, seed, shortest, fill, noisy, controller, timeout, se2 = job
     if noisy:
         opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
     else:
@@ -83,6 +83,7 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
                                lidar_noise=LidarNoise())
     t0 = time.perf_counter()
     pipe = Pipeline(opts)
+    pipe.nav.cfg.planner.se2.enabled = se2
     pipe.run_for(0.5)
     gx, gy = scene["waypoints"]["goal"]
     res = pipe.navigate(gx, gy, math.pi / 2, timeout=timeout)
@@ -143,6 +144,8 @@ def main() -> None:
     ap.add_argument("--margin", type=float, default=0.05, help="m of clearance the passability proof demands")
     ap.add_argument("--timeout", type=float, default=120.0, help="s of sim time per crossing")
     ap.add_argument("--only", default="", help="comma-separated generator seeds of the worlds to run (clutter_<seed>)")
+    ap.add_argument("--se2", choices=("on", "off"), default="on",
+                    help="the planner's footprint-aware SE(2) fallback (off: the 2D plan only, for comparison)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "clutter_suite.json"))
     a = ap.parse_args()
@@ -154,7 +157,7 @@ def main() -> None:
     print(f"{len(worlds)} passable worlds ({rejected} draws rejected by the proof) in {time.perf_counter() - t0:.0f} s",
           flush=True)
     noises = {"both": (True, False), "on": (True,), "off": (False,)}[a.noise]
-    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout)
+    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout, a.se2 == "on")
             for w in worlds for s in range(a.seeds) for n in noises]
     rows: list[dict] = []
     with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool:
