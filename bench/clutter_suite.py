@@ -1,7 +1,10 @@
 """Navigation in clutter: generated post fields, each proven passable, crossed by the in-process stack.
 
     python bench/clutter_suite.py [--worlds 200] [--seeds 3] [--noise both|on|off] [--controller pursuit|mppi]
-                                  [--jobs 2] [--out bench/results/clutter_suite.json]
+                                  [--only 41,74,94] [--se2 on|off] [--jobs 2] [--out bench/results/clutter_suite.json]
+
+``--only`` drives just the worlds of the listed generator seeds (the number in a world's name, ``clutter_41``),
+e.g. to rerun the failures of a full run without generating and proving all the worlds before them.
 
 Worlds come from :mod:`robonix_eval.clutter` (cellular automaton on a 0.15 m grid, fill drawn uniformly
 from 10–35 %, two smoothing passes; walls on three sides; start 1 m above the south wall, goal 10 m above
@@ -54,12 +57,25 @@ def make_worlds(n: int, margin: float, first_seed: int = 0) -> tuple[list[Clutte
     return worlds, rejected
 
 
-def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
+def make_selected(seeds: list[int], margin: float) -> list[ClutterWorld]:
+    """The worlds of the given generator seeds (as ``make_worlds`` draws them); a seed whose draw the proof
+    rejects is an error, since ``make_worlds`` never uses it."""
+    worlds = []
+    for seed in seeds:
+        fill = float(np.random.default_rng(seed + 7_000_000).uniform(*FILL))
+        w = generate(seed, fill, margin=margin, survive=3)
+        if not w.passable:
+            raise SystemExit(f"clutter_suite: the draw of seed {seed} is not passable (make_worlds skips it)")
+        worlds.append(w)
+    return worlds
+
+
+def run_one(job: tuple[dict, int, float, float, bool, str, float, bool]) -> dict:
     """One crossing; runs in a worker process (everything it needs travels in ``job``)."""
     from hal_panda_mobile.sim import LidarNoise, OdomNoise
     from robonix_eval.pipeline import Pipeline, PipelineOptions
 
-    scene, seed, shortest, fill, noisy, controller, timeout = job
+    scene, seed, shortest, fill, noisy, controller, timeout, se2 = job
     if noisy:
         opts = PipelineOptions(scene=scene, seed=seed, controller=controller)
     else:
@@ -67,6 +83,7 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
                                lidar_noise=LidarNoise())
     t0 = time.perf_counter()
     pipe = Pipeline(opts)
+    pipe.nav.cfg.planner.se2.enabled = se2
     pipe.run_for(0.5)
     gx, gy = scene["waypoints"]["goal"]
     res = pipe.navigate(gx, gy, math.pi / 2, timeout=timeout)
@@ -75,7 +92,26 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float]) -> dict:
             "detail": res.detail, "collisions": res.collisions, "recoveries": res.recoveries,
             "success": res.succeeded and res.collisions == 0, "time": res.time,
             "shortest_lower_bound": shortest, "time_ratio": res.time / (shortest / cruise),
-            "wall_s": time.perf_counter() - t0}
+            "wall_s": time.perf_counter() - t0, **pipe.nav.footprint_planner.stats.summary(),
+            "se2_seconds": pipe.nav.footprint_planner.stats.seconds}
+
+
+def _seeds(text: str) -> list[int]:
+    """``--only``'s world seeds (empty: all of ``--worlds``)."""
+    try:
+        out = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError as exc:
+        raise SystemExit(f"clutter_suite: --only takes comma-separated seeds, got {text!r}") from exc
+    if any(i < 0 or i >= 1_000_000 for i in out):
+        raise SystemExit("clutter_suite: --only seeds must be 0..999999")
+    return out
+
+
+def se2_summary(rows: list[dict]) -> dict:
+    """Planning time the SE(2) fallback added, over every run of it in every crossing."""
+    secs = [s for r in rows for s in r.get("se2_seconds", [])]
+    return {"runs": len(secs), "crossings_using_it": sum(r.get("se2_runs", 0) > 0 for r in rows),
+            "median_s": statistics.median(secs) if secs else 0.0, "max_s": max(secs) if secs else 0.0}
 
 
 def summarise(rows: list[dict]) -> dict:
@@ -107,17 +143,21 @@ def main() -> None:
                     help="the sim profile's controller, or override it")
     ap.add_argument("--margin", type=float, default=0.05, help="m of clearance the passability proof demands")
     ap.add_argument("--timeout", type=float, default=120.0, help="s of sim time per crossing")
+    ap.add_argument("--only", default="", help="comma-separated generator seeds of the worlds to run (clutter_<seed>)")
+    ap.add_argument("--se2", choices=("on", "off"), default="on",
+                    help="the planner's footprint-aware SE(2) fallback (off: the 2D plan only, for comparison)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "clutter_suite.json"))
     a = ap.parse_args()
     if not (1 <= a.worlds <= 10_000 and 1 <= a.seeds <= 100 and 1 <= a.jobs <= 64 and 0 <= a.margin <= 0.5):
         raise SystemExit("clutter_suite: --worlds 1..10000, --seeds 1..100, --jobs 1..64, --margin 0..0.5")
+    only = _seeds(a.only)
     t0 = time.perf_counter()
-    worlds, rejected = make_worlds(a.worlds, a.margin)
+    worlds, rejected = (make_selected(only, a.margin), 0) if only else make_worlds(a.worlds, a.margin)
     print(f"{len(worlds)} passable worlds ({rejected} draws rejected by the proof) in {time.perf_counter() - t0:.0f} s",
           flush=True)
     noises = {"both": (True, False), "on": (True,), "off": (False,)}[a.noise]
-    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout)
+    jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout, a.se2 == "on")
             for w in worlds for s in range(a.seeds) for n in noises]
     rows: list[dict] = []
     with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool:
@@ -134,10 +174,14 @@ def main() -> None:
         print(f"{k:<16} {v['succeeded']:>4}/{v['runs']:<4} success {v['success_rate']:.3f}  contacts "
               f"{v['collisions']:>3} in {v['runs_with_contact']} runs  time/shortest median "
               f"{v['time_ratio_median']:.2f}")
+    se2 = se2_summary(rows)
+    print(f"se2 fallback: {se2['runs']} runs in {se2['crossings_using_it']} crossings, median "
+          f"{se2['median_s'] * 1000:.0f} ms, max {se2['max_s'] * 1000:.0f} ms")
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"args": vars(a), "rejected_draws": rejected, "summary": summary, "runs": rows,
-                               "machine": platform.platform(), "wall_s": time.perf_counter() - t0}, indent=1))
+    out.write_text(json.dumps({"args": vars(a), "rejected_draws": rejected, "summary": summary, "se2": se2,
+                               "runs": rows, "machine": platform.platform(), "wall_s": time.perf_counter() - t0},
+                              indent=1))
     print(f"wrote {out}")
 
 

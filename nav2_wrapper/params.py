@@ -30,6 +30,7 @@ from .core.mppi import MppiConfig
 from .core.navigator import NavConfig, NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
+from .core.se2_planner import Se2PlannerConfig
 from .robot_io import RobotLimits, load_footprint
 
 CONFIG_DIR = resources.config_dir()
@@ -363,7 +364,7 @@ def load_params(source: str | Path, *, map_topic: str = "/map", odom_topic: str 
         _check_limits(rd, controller, limits, c_path)
     cfg = NavConfig(
         global_costmap=gcm, local_costmap=lcm, controller=controller,
-        planner=PlannerConfig(**into.get(PlannerConfig, {})),
+        planner=PlannerConfig(**into.get(PlannerConfig, {}), se2=Se2PlannerConfig(**into.get(Se2PlannerConfig, {}))),
         goal_checker=GoalCheckerConfig(**into.get(GoalCheckerConfig, {})),
         progress_checker=ProgressCheckerConfig(**into.get(ProgressCheckerConfig, {})),
         recovery=RecoveryConfig(**into.get(RecoveryConfig, {})),

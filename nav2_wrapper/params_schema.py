@@ -21,6 +21,7 @@ from .core.mppi import MppiConfig
 from .core.navigator import NavigatorConfig
 from .core.planner import PlannerConfig
 from .core.recoveries import RecoveryConfig
+from .core.se2_planner import Se2PlannerConfig
 
 COMPAT_NOTE = "accepted for Nav2 compatibility, not used"
 
@@ -103,8 +104,11 @@ PLANNER_SERVER = Section("planner_server", (
 
 PLANNER_PLUGINS = ("robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
                    "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner")
-PLANNER = Section("planner_server.<planner>", (_plugin(), *core_all(PlannerConfig)), PLANNER_PLUGINS,
-                  doc="Every listed plugin name runs the same cost-aware A* (names kept for Nav2 profiles).")
+PLANNER = Section("planner_server.<planner>", (
+    _plugin(), *core_all(PlannerConfig),
+    *(core(Se2PlannerConfig, n, key=f"se2_{n}") for n in declared(Se2PlannerConfig)),
+), PLANNER_PLUGINS, doc="Every listed plugin name runs the same cost-aware A* (names kept for Nav2 profiles); "
+                        "the se2_* keys set its footprint-aware (x, y, heading) fallback.")
 
 CONTROLLER_SERVER = Section("controller_server", (
     _sim_time(),

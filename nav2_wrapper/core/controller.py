@@ -142,8 +142,15 @@ class HolonomicController:
             vel, self.last_sent, (c.acc_lim_x, c.acc_lim_y, c.acc_lim_theta), self.latency)
         return predict_pose((float(pose[0]), float(pose[1]), float(pose[2])), twist, self.latency)
 
-    def set_path(self, path: NDArray[np.float64]) -> None:
+    def set_path(self, path: NDArray[np.float64], headings: NDArray[np.float64] | None = None) -> None:
+        """Follow ``path``; ``headings`` (rad per point, from the footprint-aware planner) is the yaw to hold at
+        each point. Passing the current path object again (a restart after a recovery) keeps its headings."""
+        if headings is None and path is getattr(self, "path", None):
+            headings = self.path_headings
+        self.path_headings = None if headings is None else np.asarray(headings, dtype=float).reshape(-1)
         self.path = np.asarray(path, dtype=float).reshape(-1, 2)
+        if self.path_headings is not None and len(self.path_headings) != len(self.path):
+            raise ValueError(f"{len(self.path_headings)} headings for {len(self.path)} path points")
         seg = np.hypot(*np.diff(self.path, axis=0).T) if len(self.path) > 1 else np.zeros(0)
         self._cum = np.concatenate([[0.0], np.cumsum(seg)])
         self._idx = -1
@@ -202,7 +209,8 @@ class HolonomicController:
         if goal_yaw:
             targets = [goal[2]]
         else:
-            passage = self._passage_yaw(i, th, costmap)
+            planned = self.planned_yaw(i)
+            passage = self._passage_yaw(i, th, costmap) if planned is None else planned
             order = (passage, near_yaw, far_yaw) if passage is not None else (far_yaw, near_yaw)
             targets = [self._nearest_end(t, th) for t in order]
         err = float(wrap_angle(targets[0] - th))
@@ -245,6 +253,13 @@ class HolonomicController:
             k = max(int(np.searchsorted(self._cum, self._cum[j] - span)) - 1, 0)
             seg = self.path[j] - self.path[k]
         return math.atan2(seg[1], seg[0]) if float(np.hypot(*seg)) > 1e-6 else default
+
+    def planned_yaw(self, i: int) -> float | None:
+        """The planner's heading for the body at path index ``i`` (one point ahead, so a turn in place at a
+        point starts as the body arrives there), or None for a path planned without headings."""
+        if self.path_headings is None or len(self.path_headings) == 0:
+            return None
+        return float(self.path_headings[min(i + 1, len(self.path_headings) - 1)])
 
     def _nearest_end(self, yaw: float, th: float) -> float:
         """With a front/back-symmetric footprint either end may lead: the target closer to the heading now."""

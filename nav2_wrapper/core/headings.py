@@ -88,10 +88,17 @@ def assign_headings(path: NDArray[np.float64], costmap: Costmap, outline: NDArra
     """The least-turning feasible heading profile along ``path`` (see the module docstring)."""
     cfg = cfg or HeadingConfig()
     pts = resample(path, cfg.spacing)
-    n, k = len(pts), cfg.bins
-    if n == 0:
+    if len(pts) == 0:
         return HeadingPlan(pts, np.zeros(0), None)
-    ok = feasible_bins(pts, costmap, outline, k)
+    return headings_over(pts, feasible_bins(pts, costmap, outline, cfg.bins), cfg, start_yaw)
+
+
+def headings_over(pts: NDArray[np.float64], ok: NDArray[np.bool_], cfg: HeadingConfig,
+                  start_yaw: float | None = None) -> HeadingPlan:
+    """The dynamic programme of :func:`assign_headings` on given points and an (N, bins) feasibility matrix,
+    for callers with their own collision model (the SE(2) planner's grown-footprint grids)."""
+    n, k = ok.shape
+    ok = ok.copy()
     if start_yaw is not None:
         ok[0] = False
         ok[0, int(round((start_yaw % math.pi) / (math.pi / k))) % k] = True   # the body is where it is

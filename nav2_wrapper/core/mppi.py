@@ -74,8 +74,8 @@ class MppiController(HolonomicController):
         self._sample_points = self.cfg.footprint.outline_points(m.outline_spacing)
         self.last_samples: NDArray[np.float64] | None = None   # (K, T, 3) poses of the last step, for display
 
-    def set_path(self, path: NDArray[np.float64]) -> None:
-        super().set_path(path)
+    def set_path(self, path: NDArray[np.float64], headings: NDArray[np.float64] | None = None) -> None:
+        super().set_path(path, headings)
         if hasattr(self, "_u"):
             self._u[:] = 0.0
 
@@ -99,11 +99,15 @@ class MppiController(HolonomicController):
 
     # ---- the optimiser -----------------------------------------------------------------------------------
     def _heading_target(self, i: int, pose: Pose2D, goal: Pose2D, costmap: Costmap) -> float:
-        """The yaw the body should hold: the passage-fitting yaw in a narrow spot, else the path direction
-        (either end leading), near the goal the goal's yaw."""
+        """The yaw the body should hold: the planner's heading when the path has one (the footprint-aware
+        fallback planned it), else the passage-fitting yaw in a narrow spot, else the path direction (either end
+        leading); near the goal the goal's yaw."""
         th = pose[2]
         if math.hypot(goal[0] - pose[0], goal[1] - pose[1]) < self.cfg.rotate_to_goal_dist:
             return float(goal[2])
+        planned = self.planned_yaw(i)
+        if planned is not None:
+            return self._nearest_end(planned, th)
         passage = self._passage_yaw(i, th, costmap)
         if passage is not None:
             return self._nearest_end(passage, th)

@@ -26,6 +26,7 @@ from .controller import ControllerConfig, HolonomicController
 from .costmap import Costmap, CostmapConfig
 from .costs import INSCRIBED, LETHAL
 from .footprint import Footprint
+from .footprint_planning import FootprintAwarePlanner
 from .mppi import MppiConfig, MppiController
 from .planner import GlobalPlanner, PlannerConfig, PlanResult
 from .recoveries import RecoveryConfig, RecoverySequence
@@ -124,6 +125,7 @@ class Navigator:
         self.global_costmap = Costmap(self.cfg.global_costmap)
         self.local_costmap = Costmap(self.cfg.local_costmap)
         self.planner = GlobalPlanner(self.cfg.planner)
+        self.footprint_planner = FootprintAwarePlanner(self.planner, self.cfg.global_costmap.footprint)
         self.controller = (HolonomicController(self.cfg.controller) if self.cfg.mppi is None
                            else MppiController(self.cfg.controller, self.cfg.mppi))
         self.goal_checker = GoalChecker(self.cfg.goal_checker)
@@ -334,11 +336,13 @@ class Navigator:
     def _plan(self, pose: Pose2D, now: float) -> PlanResult:
         goal = self.active.goal if self.active else pose
         res = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
+        if res.ok:
+            res = self.footprint_planner.refine(self.global_costmap, pose, (goal[0], goal[1]), res)
         self._last_plan = now
         self._force_replan = False
         if res.ok:
             self.path = res.path
-            self.controller.set_path(res.path)
+            self.controller.set_path(res.path, res.headings)
         return res
 
     def _path_blocked(self, pose: Pose2D) -> bool:

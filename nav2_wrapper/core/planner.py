@@ -17,6 +17,7 @@ from robonix_common.params import param
 from . import _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
+from .se2_planner import Se2PlannerConfig
 
 # f range of one bucket of the cost-optimal search's queue (cells × traversal factor). Wider buckets mean fewer
 # bucket switches but more cells expanded before their final g; 1.0 was fastest of 0.1-4 on the bench maps
@@ -41,6 +42,7 @@ class PlannerConfig:
     heuristic_weight: float = param(
         1.25, "weighted A*: path cost <= weight * optimal (1.25: measured median 1.03-1.06, ~5x fewer expansions)",
         ge=1.0)
+    se2: Se2PlannerConfig = field(default_factory=Se2PlannerConfig)   # the footprint-aware fallback (se2_* keys)
 
 
 @dataclass
@@ -51,6 +53,7 @@ class PlanResult:
     cost: float = 0.0                   # A* cost (cells × traversal factor)
     length: float = 0.0                 # m, of the returned path
     expansions: int = 0
+    headings: NDArray[np.float64] | None = None   # per path point (rad): set when the SE(2) fallback planned it
 
 
 class _Search:

@@ -25,8 +25,8 @@ from .planner import GlobalPlanner, PlannerConfig
 
 
 def compile_kernels() -> float:
-    """Plan once around an obstacle (A*, backtrack and the shortcut pass all run) and run the MPPI
-    controller's rollout kernel; returns seconds."""
+    """Plan once around an obstacle (A*, backtrack and the shortcut pass all run), once with the SE(2)
+    fallback, and run the MPPI controller's rollout kernel; returns seconds."""
     t0 = time.perf_counter()
     grid = np.zeros((60, 60), np.int8)
     grid[10:50, 28:32] = 100  # a wall between start and goal, so the path bends and gets shortcut
@@ -38,8 +38,20 @@ def compile_kernels() -> float:
         result = GlobalPlanner(PlannerConfig(heuristic_weight=weight)).plan(costmap, (0.4, 1.5), (2.6, 1.5))
         if not result.ok:
             raise RuntimeError(f"warm-up plan failed: {result.reason}")
+    _compile_se2(costmap, square)
     _compile_mppi()
     return time.perf_counter() - t0
+
+
+def _compile_se2(costmap: Costmap, footprint: Footprint) -> None:
+    """The footprint-aware fallback's kernels (collision grids, cost to go, lattice A*): the first plan that
+    needs the fallback is usually mid-run, where 20 s of compiling would stall the robot."""
+    from .se2_planner import Se2Planner, Se2PlannerConfig
+
+    plan = Se2Planner(Se2PlannerConfig(), footprint).plan(costmap, (0.4, 1.5, 0.0), (2.6, 1.5),
+                                                          GlobalPlanner().traversal_table())
+    if not plan.ok:
+        raise RuntimeError(f"warm-up SE(2) plan failed: {plan.reason}")
 
 
 def _compile_mppi() -> None:

@@ -1,0 +1,79 @@
+"""Footprint-aware global planning: the 2D plan, checked for headings, with the SE(2) search as a fallback.
+
+The 2D planner is fast and right wherever the rectangle fits the path at some heading, which is nearly always;
+the heading assignment (``headings``) tells cheaply whether that is so. It is run on the SE(2) search's own
+collision model — the footprint grown by the search's margin — not on the bare outline: a path the bare outline
+passes with millimetres to spare is one the robot wedges on (clutter world 41: the bare check accepts a 13 m
+route, the configuration-space proof's shortest route with 5 cm clearance is 15.4 m). Only when some point of
+the 2D path has no such heading does the (x, y, heading) lattice search run: a route through a
+gap the inscribed disc fits but the rectangle does not must be replaced by a different route, not by a keep-out
+patch on the same one. If the lattice search fails too (e.g. the map is still mostly unknown, or the window is
+too small), the 2D path is kept: the controller's own footprint checks and the recoveries still apply, and the
+next replan sees more of the map.
+"""
+
+from __future__ import annotations
+
+import statistics
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from robonix_common.geometry import Pose2D
+
+from .costmap import Costmap
+from .footprint import Footprint
+from .headings import HeadingConfig, headings_over, resample
+from .planner import GlobalPlanner, PlanResult
+from .se2_planner import Se2Plan, Se2Planner
+
+
+@dataclass
+class FallbackStats:
+    """What the SE(2) fallback did so far (for benches and logs): wall seconds of each run and their outcome."""
+
+    runs: int = 0
+    found: int = 0
+    seconds: list[float] = field(default_factory=list)
+    last: Se2Plan | None = None
+
+    def summary(self) -> dict[str, float]:
+        s = self.seconds
+        return {"se2_runs": self.runs, "se2_found": self.found,
+                "se2_median_s": statistics.median(s) if s else 0.0, "se2_max_s": max(s) if s else 0.0}
+
+
+class FootprintAwarePlanner:
+    """Wraps the 2D planner's result: heading check, then the SE(2) fallback where no heading fits."""
+
+    def __init__(self, planner: GlobalPlanner, footprint: Footprint) -> None:
+        self.planner = planner
+        self.se2 = Se2Planner(planner.cfg.se2, footprint)
+        # the 2D path is checked with the SE(2) search's own collision model (grown footprint, same bins), at
+        # half the costmap cells' spacing of the usual heading assignment
+        self.headings_cfg = HeadingConfig(bins=planner.cfg.se2.bins, spacing=0.05)
+        self.stats = FallbackStats()
+
+    def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult) -> PlanResult:
+        """``res`` itself when the footprint fits along it at some heading everywhere (or the fallback is off),
+        else the SE(2) path with its headings, else ``res`` again (see the module docstring)."""
+        cfg = self.planner.cfg
+        if not cfg.se2.enabled or not res.ok or len(res.path) < 2:
+            return res
+        pts = resample(res.path, self.headings_cfg.spacing)
+        ok = self.se2.feasible_bins(costmap, pts)
+        # where the body is now it already fits (a grown-footprint overlap there is the margin, not a wedge):
+        # the search would only escape from it, so it is no reason to replace the plan
+        ok[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) <= cfg.se2.escape_radius] = True
+        if headings_over(pts, ok, self.headings_cfg).feasible:
+            return res
+        plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
+                             self.planner.traversal_table(), cfg.tolerance, guide=res.path)
+        self.stats.runs += 1
+        self.stats.seconds.append(plan.seconds)
+        self.stats.last = plan
+        if not plan.ok:
+            return res
+        self.stats.found += 1
+        return replace(res, path=plan.path, headings=np.asarray(plan.headings), length=plan.length,
+                       expansions=res.expansions + plan.expansions)

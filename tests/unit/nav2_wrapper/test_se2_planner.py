@@ -1,0 +1,217 @@
+"""The footprint-aware (x, y, heading) fallback planner and its use after the 2D plan."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nav2_wrapper.core.controller import ControllerConfig
+from nav2_wrapper.core.costmap import Costmap, CostmapConfig
+from nav2_wrapper.core.costs import LETHAL
+from nav2_wrapper.core.footprint import Footprint
+from nav2_wrapper.core.footprint_planning import FootprintAwarePlanner
+from nav2_wrapper.core.headings import assign_headings
+from nav2_wrapper.core.mppi import MppiController
+from nav2_wrapper.core.navigator import RUNNING, NavConfig, Navigator
+from nav2_wrapper.core.planner import GlobalPlanner, PlannerConfig
+from nav2_wrapper.core.se2_planner import Se2Planner, Se2PlannerConfig, kernel_rows
+from robonix_common.grid import GridMap
+
+RES = 0.05
+FOOTPRINT = Footprint(np.array([[0.35, 0.25], [-0.35, 0.25], [-0.35, -0.25], [0.35, -0.25]]))
+FINE_OUTLINE = FOOTPRINT.outline_points(0.02)
+START, GOAL = (4.0, 1.5, math.pi / 2), (4.0, 6.5)
+
+
+def _cells(v: float) -> int:
+    return int(round(v / RES))
+
+
+def _world(slot: bool) -> Costmap:
+    """8 × 8 m; a 1.5 m thick wall across it (y 3.25-4.75) pierced by a dogleg channel 0.55 m wide near x = 4
+    (the inscribed disc fits along it, but the 0.70 × 0.50 m body cannot turn its right-angle corners) and,
+    optionally, a straight slot 0.70 m wide at x 1.0-1.7: narrower than the circumscribed circle (0.86 m),
+    so the body fits only held lengthwise."""
+    g = np.zeros((160, 160), np.int8)
+    g[_cells(3.25):_cells(4.75), :] = 100
+
+    def free(x0: float, x1: float, y0: float, y1: float) -> None:
+        g[_cells(y0):_cells(y1), _cells(x0):_cells(x1)] = 0
+
+    free(3.75, 4.30, 3.25, 4.30)
+    free(3.75, 5.10, 3.75, 4.30)
+    free(4.55, 5.10, 3.75, 4.75)
+    if slot:
+        free(1.0, 1.7, 3.25, 4.75)
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    cm.set_static_map(GridMap(g, RES))
+    return cm
+
+
+def _plan_2d(cm: Costmap) -> np.ndarray:
+    res = GlobalPlanner().plan(cm, START[:2], GOAL)
+    assert res.ok
+    return res.path
+
+
+def _se2(cm: Costmap, guide: np.ndarray | None, **kw: object) -> object:
+    planner = Se2Planner(Se2PlannerConfig(**kw), FOOTPRINT)   # type: ignore[arg-type]
+    return planner.plan(cm, START, GOAL, GlobalPlanner().traversal_table(), guide=guide)
+
+
+def _lethal_contacts(cm: Costmap, path: np.ndarray, headings: np.ndarray) -> int:
+    poses = np.column_stack([path, headings])
+    return int((cm.footprint_costs(poses, FINE_OUTLINE, outside=0) == LETHAL).any(axis=1).sum())
+
+
+def test_the_2d_route_through_the_dogleg_has_no_fitting_heading_and_se2_takes_the_slot_lengthwise() -> None:
+    cm = _world(slot=True)
+    path2d = _plan_2d(cm)
+    assert np.all(path2d[:, 0] > 3.5)                                   # the 2D plan takes the short dogleg
+    assert not assign_headings(path2d, cm, FOOTPRINT.outline_points(0.05)).feasible
+    plan = _se2(cm, path2d)
+    assert plan.ok, plan.reason
+    assert np.allclose(plan.path[0], START[:2])
+    assert np.allclose(plan.path[-1], GOAL)
+    in_wall = (plan.path[:, 1] > 3.3) & (plan.path[:, 1] < 4.7)
+    assert in_wall.any()
+    assert np.all(np.abs(plan.path[in_wall, 0] - 1.35) < 0.1)
+    yaw = np.mod(plan.headings[in_wall], math.pi)
+    assert np.all(np.abs(yaw - math.pi / 2) < math.radians(10))         # held lengthwise through it
+    assert _lethal_contacts(cm, plan.path, plan.headings) == 0
+    steps = np.hypot(*np.diff(plan.path, axis=0).T)
+    assert steps.max() <= RES + 1e-9                                     # dense, as the controllers expect
+
+
+def test_no_heading_fits_anywhere_then_se2_reports_no_path() -> None:
+    cm = _world(slot=False)
+    plan = _se2(cm, _plan_2d(cm))
+    assert not plan.ok
+    assert "cut off" in plan.reason
+
+
+def test_every_pose_of_a_cluttered_se2_path_is_clear_of_lethal_cells() -> None:
+    """Soundness on random posts: the motion the path describes is collision-free with the true footprint —
+    translating from each point to the next at the first one's heading, then turning in place (the short way,
+    as the controllers turn) to the next point's heading."""
+    rng = np.random.default_rng(2)
+    g = np.zeros((140, 120), np.int8)
+    for _ in range(45):
+        r, c = rng.integers(30, 110), rng.integers(0, 117)
+        g[r:r + 3, c:c + 3] = 100
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    cm.set_static_map(GridMap(g, RES))
+    plan = Se2Planner(Se2PlannerConfig(), FOOTPRINT).plan(cm, (3.0, 0.6, 0.0), (3.0, 6.4),
+                                                          GlobalPlanner().traversal_table())
+    assert plan.ok, plan.reason
+    assert _lethal_contacts(cm, plan.path, plan.headings) == 0
+    assert _lethal_contacts(cm, plan.path[1:], plan.headings[:-1]) == 0          # arriving before a turn
+    turn = (np.mod(np.diff(plan.headings) + math.pi / 2, math.pi) - math.pi / 2)  # short way, modulo a half turn
+    turning = np.flatnonzero(np.abs(turn) > 1e-9)
+    assert len(turning) >= 3                                                      # the field makes it turn
+    frac = np.linspace(0.0, 1.0, 11)
+    for i in turning:
+        yaws = plan.headings[i] + frac * turn[i]
+        pts = np.repeat(plan.path[i + 1][None], len(frac), axis=0)
+        assert _lethal_contacts(cm, pts, yaws) == 0
+
+
+def test_the_search_stops_at_max_expansions() -> None:
+    cm = _world(slot=True)
+    plan = _se2(cm, _plan_2d(cm), max_expansions=1000)
+    assert not plan.ok
+    assert plan.expansions == 1000
+    assert "max_expansions" in plan.reason
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.3, math.pi / 4, 1.2, math.pi / 2])
+def test_kernel_rows_cover_exactly_the_cells_the_rectangle_overlaps(yaw: float) -> None:
+    """Against a dense point sampling of the turned rectangle: every cell holding a sample is in the kernel,
+    and every kernel cell lies within half a cell's diagonal of the rectangle."""
+    hl, hw = 0.36, 0.26
+    pad, lo, hi = kernel_rows(hl, hw, yaw, RES)
+    inside = {(di, dj) for k, di in enumerate(range(-pad, pad + 1)) for dj in range(lo[k], hi[k] + 1)}
+    u, v = np.meshgrid(np.linspace(-hl, hl, 200), np.linspace(-hw, hw, 150))
+    x, y = u * math.cos(yaw) - v * math.sin(yaw), u * math.sin(yaw) + v * math.cos(yaw)
+    covered = set(zip(np.round(y / RES).astype(int).ravel(), np.round(x / RES).astype(int).ravel(), strict=True))
+    assert covered <= inside
+    for di, dj in inside:
+        cx, cy = dj * RES, di * RES
+        bu, bv = cx * math.cos(yaw) + cy * math.sin(yaw), -cx * math.sin(yaw) + cy * math.cos(yaw)
+        gap = math.hypot(max(abs(bu) - hl, 0.0), max(abs(bv) - hw, 0.0))
+        assert gap <= RES / math.sqrt(2) + 1e-9
+
+
+def test_the_navigator_side_keeps_a_fitting_2d_plan_and_replaces_one_that_does_not_fit() -> None:
+    open_map = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    open_map.set_static_map(GridMap(np.zeros((160, 160), np.int8), RES))
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    res = gp.plan(open_map, START[:2], GOAL)
+    assert fap.refine(open_map, START, GOAL, res) is res
+    assert fap.stats.runs == 0
+    cm = _world(slot=True)
+    res = gp.plan(cm, START[:2], GOAL)
+    out = fap.refine(cm, START, GOAL, res)
+    assert out.headings is not None
+    assert len(out.headings) == len(out.path)
+    assert out.path[:, 0].min() < 2.0
+    assert fap.stats.found == 1
+    off = FootprintAwarePlanner(GlobalPlanner(PlannerConfig(se2=Se2PlannerConfig(enabled=False))), FOOTPRINT)
+    assert off.refine(cm, START, GOAL, res) is res
+
+
+def test_the_controllers_hold_the_planned_heading_and_keep_it_across_a_restart() -> None:
+    cm = _world(slot=True)
+    plan = _se2(cm, _plan_2d(cm))
+    ctl = MppiController(ControllerConfig(footprint=FOOTPRINT))
+    ctl.set_path(plan.path, plan.headings)
+    in_wall = int(np.flatnonzero(plan.path[:, 1] > 3.5)[0])
+    x, y = plan.path[in_wall]
+    ctl._idx = -1
+    i = ctl._closest(x, y)
+    target = ctl._heading_target(i, (x, y, 0.2), (*GOAL, 0.0), cm)
+    assert abs(math.sin(target)) > math.cos(math.radians(10))      # along the slot, whatever the yaw now
+    ctl.set_path(ctl.path)                                           # what the navigator does after a recovery
+    assert ctl.path_headings is not None
+    ctl.set_path(plan.path[:10])                                     # a new plain path drops them
+    assert ctl.path_headings is None
+    with pytest.raises(ValueError, match="headings for"):
+        ctl.set_path(plan.path, plan.headings[:-1])
+
+
+def test_the_navigator_plans_the_slot_route_and_hands_its_headings_to_the_controller() -> None:
+    cm = _world(slot=True)
+    grid = GridMap(np.where(cm.static == LETHAL, 100, 0).astype(np.int8), RES)
+    cfg = NavConfig.defaults(FOOTPRINT)
+    cfg.mppi = None
+    nav = Navigator(cfg)
+    nav.tick(0.0, START, grid=grid)
+    rec = nav.navigate(GOAL[0], GOAL[1], math.pi / 2, now=0.0)
+    nav.tick(0.05, START)
+    assert rec.state == RUNNING
+    assert nav.controller.path_headings is not None
+    assert nav.path[:, 0].min() < 2.0                                 # the slot, not the dogleg
+    assert nav.footprint_planner.stats.found == 1
+
+
+@pytest.mark.parametrize("posts", [0, 45])
+def test_the_distance_shortcut_leaves_the_collision_grids_unchanged(posts: int,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """Cells decided from the distance transform (free or blocked at every heading) match the per-heading test."""
+    rng = np.random.default_rng(2)
+    g = np.zeros((100, 90), np.int8)
+    for _ in range(posts):
+        r, c = rng.integers(0, 97), rng.integers(0, 87)
+        g[r:r + 3, c:c + 3] = 100
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    cm.set_static_map(GridMap(g, RES))
+    planner = Se2Planner(Se2PlannerConfig(), FOOTPRINT)
+    win = planner._window(cm, np.array([[1.0, 1.0], [3.5, 4.0]]), 1.0)
+    fast = planner.blocked_grids(cm, win)
+    monkeypatch.setattr(planner, "_decided", lambda lethal, pad, res: np.full(
+        (lethal.shape[0] - 2 * pad, lethal.shape[1] - 2 * pad), 2, np.uint8))
+    assert np.array_equal(fast, planner.blocked_grids(cm, win))
+    assert fast.any() == (posts > 0)
