@@ -21,6 +21,7 @@ from robonix_common.geometry import PoseArray, compose, inverse, relative, trans
 from robonix_common.grid import GridMap
 from robonix_common.scan import Scan
 
+from .lifelong import redundant_nodes
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
 from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
@@ -75,6 +76,7 @@ class SlamEngine:
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
         self._running_built_at = 0
         self._last_loop_node = -10**9
+        self._closed_at = -10**9  # node of the last accepted loop closure (gates lifelong pruning)
         self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
@@ -387,8 +389,51 @@ class SlamEngine:
                 self._drift = 0.0
         if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
             self._render_pending()
+        self._prune(k)
         self.stats.scans_integrated += 1
         return self._update(True, True, response=response, loop=loop)
+
+    # ---------------------------------------------------------------- lifelong pruning
+    def _prune(self, k: int) -> None:
+        """Remove the old nodes new node ``k`` makes redundant (see :mod:`.lifelong`). Only right after an
+        accepted loop closure (the new chain then agrees with the old map: a drifted chain must not
+        replace good nodes) and only among loop candidates (at least ``loop_min_chain_distance`` back
+        along the path and outside the running submap)."""
+        c = self.config
+        if not c.prune_nodes or k - self._closed_at > c.prune_after_loop_nodes:
+            return
+        path = np.asarray(self._path)
+        recent = np.flatnonzero(path[k] - path < c.loop_min_chain_distance)
+        protect_from = min(k - c.running_buffer_size, int(recent[0]) if len(recent) else k)
+        for m in sorted(redundant_nodes(c, self.graph.poses, self._stamps, self._points, k, protect_from),
+                        reverse=True):  # highest index first: the lower ones keep their numbers
+            self._remove_node(m)
+
+    def _remove_node(self, m: int) -> None:
+        """Forget node ``m``: its scan leaves the grid (exact: the grid stores sums), its edges are
+        reconnected through a neighbour, and every per-node list and index shifts down past it."""
+        if m < len(self._rendered):
+            old = self._rendered[m]
+            self.grid.integrate(transform_points(old, self._origins[m][None])[0],
+                                transform_points(old, self._points[m]), weight=-1.0)
+            if m in self._free:
+                self._clear_free(m, old, -1.0)
+            del self._rendered[m]
+        self.graph.remove_node(m)
+        for lst in (self._odom, self._stamps, self._path, self._points, self._origins):
+            del lst[m]
+        self._free = {(i - 1 if i > m else i): v for i, v in self._free.items() if i != m}
+        self._pending = [i - 1 if i > m else i for i in self._pending if i != m]
+        self.stats.map_nodes_pending = len(self._pending)
+
+        def shift(i: int) -> int:
+            return i - 1 if i > m else i
+
+        self._last_loop_node, self._closed_at = shift(self._last_loop_node), shift(self._closed_at)
+        self._running_built_at = shift(self._running_built_at)
+        self._loop_lookup = None  # keyed by node numbers, which just changed
+        self._map_cache = None
+        self.stats.nodes_pruned += 1
 
     def _match_step(self, points: NDArray, predicted: PoseArray,
                     n: int) -> tuple[PoseArray, NDArray | None, int, float]:
@@ -521,6 +566,7 @@ class SlamEngine:
             return self._reject_loop("inconsistent after optimisation")
         self.stats.loop_closures += 1
         self._last_loop_node = k
+        self._closed_at = k
         self._optimize((res, elapsed))
         return True
 

@@ -69,6 +69,62 @@ class PoseGraph:
         for lst in (self.edge_ij, self.edge_z, self.edge_info, self.edge_kind):
             lst.pop()
 
+    def remove_node(self, m: int) -> list[tuple[int, int]]:
+        """Remove node ``m`` and keep what its edges said about the others (approximate marginalisation).
+
+        Why: all-day operation revisits the same rooms; without removing nodes the graph (and every per-node
+        array) grows with the distance driven. Each edge (m, o) is re-expressed as "o seen from m"; one
+        neighbour, the hub (the next node in the chain if m has one, else its strongest neighbour), keeps
+        the information: every other neighbour o gets an edge hub -> o composed through m, its covariance
+        the sum of both (first-order propagation). A leaf (one neighbour) just goes: it constrains nothing
+        else. Cross-correlations between the new edges are dropped, as in slam_toolbox's vertex removal.
+        Node 0 anchors the gauge and cannot be removed. Returns the new edges (renumbered indices).
+        """
+        n = self.n_nodes
+        if not 0 < m < n:
+            raise ValueError(f"cannot remove node {m} (have {n}; node 0 anchors the map)")
+        views: dict[int, list[tuple[NDArray, NDArray, int]]] = {}  # neighbour -> [(z m->o, cov in m, kind)]
+        keep = []
+        for e, (i, j) in enumerate(self.edge_ij):
+            if m not in (i, j):
+                keep.append(e)
+                continue
+            z, cov = self.edge_z[e], _inv_sym(self.edge_info[e])
+            if i == m:
+                views.setdefault(j, []).append((z, cov, self.edge_kind[e]))
+            else:
+                zi, ci = _invert(z, cov)
+                views.setdefault(i, []).append((zi, ci, self.edge_kind[e]))
+        added: list[tuple[int, int, NDArray, NDArray, int]] = []
+        if len(views) > 1:
+            hub = m + 1 if m + 1 in views else max(views, key=lambda o: max(np.trace(_inv_sym(c)) for _, c, _ in
+                                                                              views[o]))
+            z_hub, c_hub, k_hub = _fuse(views[hub])
+            z_hm, c_hm = _invert(z_hub, c_hub)  # m seen from the hub
+            for o, vs in views.items():
+                if o == hub:
+                    continue
+                z_mo, c_mo, k_mo = _fuse(vs)
+                z, cov = _compose_cov(z_hm, c_hm, z_mo, c_mo)
+                kind = EDGE_LOOP if EDGE_LOOP in (k_hub, k_mo) else max(k_hub, k_mo)
+                added.append((hub, o, z, cov, kind))
+        self.edge_ij = [self.edge_ij[e] for e in keep]
+        self.edge_z = [self.edge_z[e] for e in keep]
+        self.edge_info = [self.edge_info[e] for e in keep]
+        self.edge_kind = [self.edge_kind[e] for e in keep]
+        self.poses = np.delete(self.poses, m, axis=0)
+
+        def shift(a: int) -> int:
+            return a - 1 if a > m else a
+
+        self.edge_ij = [(shift(i), shift(j)) for i, j in self.edge_ij]
+        out = []
+        for a, b, z, cov, kind in added:
+            a, b = shift(a), shift(b)
+            self.add_edge(a, b, z, _inv_sym(cov), kind)
+            out.append((a, b))
+        return out
+
     def _arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         ij = np.asarray(self.edge_ij, dtype=np.int64).reshape(-1, 2)
         return ij[:, 0], ij[:, 1], np.asarray(self.edge_z).reshape(-1, 3), np.asarray(self.edge_info).reshape(-1, 3, 3)
@@ -208,3 +264,53 @@ def _normal_equations(n: int, i: NDArray, j: NDArray, e: NDArray, a: NDArray, b:
     np.add.at(g, (3 * i[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", at_o, e).ravel())
     np.add.at(g, (3 * j[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", bt_o, e).ravel())
     return h, g
+
+
+def _inv_sym(a: NDArray) -> NDArray:
+    """Inverse of a symmetric positive definite 3x3 (information <-> covariance), symmetrised."""
+    b = np.linalg.inv(0.5 * (a + a.T))
+    return 0.5 * (b + b.T)
+
+
+def _rot(t: float) -> NDArray:
+    c, s = math.cos(t), math.sin(t)
+    return np.array([[c, -s], [s, c]])
+
+
+def _invert(z: NDArray, cov: NDArray) -> tuple[NDArray, NDArray]:
+    """z = pose of b in frame a with covariance in frame a -> pose of a in frame b, covariance in frame b."""
+    r = _rot(z[2])
+    t = -r.T @ z[:2]
+    j = np.zeros((3, 3))
+    j[:2, :2] = -r.T
+    j[:2, 2] = (t[1], -t[0])  # d(-R^T t_z)/dtheta, written in the inverted translation t
+    j[2, 2] = -1.0
+    return np.array([t[0], t[1], -z[2]]), j @ cov @ j.T
+
+
+def _compose_cov(a: NDArray, ca: NDArray, b: NDArray, cb: NDArray) -> tuple[NDArray, NDArray]:
+    """a (b in frame h) o b (c in frame b): c in frame h, covariance by first-order propagation."""
+    r = _rot(a[2])
+    tb = r @ b[:2]
+    z = np.array([a[0] + tb[0], a[1] + tb[1], math.remainder(a[2] + b[2], 2 * math.pi)])
+    ja = np.eye(3)
+    ja[0, 2], ja[1, 2] = -tb[1], tb[0]
+    jb = np.eye(3)
+    jb[:2, :2] = r
+    cov = ja @ ca @ ja.T + jb @ cb @ jb.T
+    return z, 0.5 * (cov + cov.T)
+
+
+def _fuse(views: list[tuple[NDArray, NDArray, int]]) -> tuple[NDArray, NDArray, int]:
+    """Several measurements of the same relative pose (a sequential and a loop edge between the same
+    two nodes): information-weighted mean, summed information; the strongest kind wins (loop > seq)."""
+    if len(views) == 1:
+        return views[0]
+    infos = [_inv_sym(c) for _, c, _ in views]
+    ref = views[0][0]
+    # average the angle as offsets from the first one, so +pi/-pi do not cancel
+    zs = [np.array([z[0], z[1], ref[2] + math.remainder(z[2] - ref[2], 2 * math.pi)]) for z, _, _ in views]
+    total = sum(infos)
+    z = np.linalg.solve(total, sum(i @ v for i, v in zip(infos, zs, strict=True)))
+    z[2] = math.remainder(z[2], 2 * math.pi)
+    return z, _inv_sym(total), max(k for _, _, k in views)
