@@ -431,7 +431,9 @@ class SlamEngine:
 
         self._last_loop_node, self._closed_at = shift(self._last_loop_node), shift(self._closed_at)
         self._running_built_at = shift(self._running_built_at)
-        self._loop_lookup = None  # keyed by node numbers, which just changed
+        if self._loop_lookup is not None:  # keyed by node numbers: renumber, or drop if it drew m
+            (nodes, opt), lookup = self._loop_lookup
+            self._loop_lookup = None if m in nodes else ((tuple(shift(i) for i in nodes), opt), lookup)
         self._map_cache = None
         self.stats.nodes_pruned += 1
 

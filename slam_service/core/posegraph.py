@@ -70,60 +70,66 @@ class PoseGraph:
             lst.pop()
 
     def remove_node(self, m: int) -> list[tuple[int, int]]:
-        """Remove node ``m`` and keep what its edges said about the others (approximate marginalisation).
+        """Remove node ``m``, keeping the graph connected and its current shape (lifelong pruning).
 
-        Why: all-day operation revisits the same rooms; without removing nodes the graph (and every per-node
-        array) grows with the distance driven. Each edge (m, o) is re-expressed as "o seen from m"; one
-        neighbour, the hub (the next node in the chain if m has one, else its strongest neighbour), keeps
-        the information: every other neighbour o gets an edge hub -> o composed through m, its covariance
-        the sum of both (first-order propagation). A leaf (one neighbour) just goes: it constrains nothing
-        else. Cross-correlations between the new edges are dropped, as in slam_toolbox's vertex removal.
-        Node 0 anchors the gauge and cannot be removed. Returns the new edges (renumbered indices).
+        Why this way: re-expressing all of a removed node's edges through one neighbour (a star) makes that
+        neighbour inherit them; when old nodes are pruned one after another along their chain the survivor
+        collects every loop edge of the pass (degree 25+ seen) and composite edges of composites skew the
+        map. Instead, every later neighbour ``u`` of ``m`` that has no other earlier neighbour (normally just
+        the next node of the chain) gets an edge from ``m``'s latest earlier neighbour ``p``: its measurement
+        is the *current* relative pose of the two (the optimised geometry, loop corrections included, is
+        kept exactly: zero residual), its covariance the first-order composition of the two edges through
+        ``m`` (the chain's stiffness). ``m``'s other edges (loop closures) go with it; their correction is
+        already in the poses. Every node keeps an earlier neighbour, so the graph stays connected to node 0,
+        which anchors the gauge and cannot be removed. Returns the added edges (indices after removal).
         """
         n = self.n_nodes
         if not 0 < m < n:
             raise ValueError(f"cannot remove node {m} (have {n}; node 0 anchors the map)")
-        views: dict[int, list[tuple[NDArray, NDArray, int]]] = {}  # neighbour -> [(z m->o, cov in m, kind)]
-        keep = []
-        for e, (i, j) in enumerate(self.edge_ij):
-            if m not in (i, j):
-                keep.append(e)
-                continue
-            z, cov = self.edge_z[e], _inv_sym(self.edge_info[e])
-            if i == m:
-                views.setdefault(j, []).append((z, cov, self.edge_kind[e]))
-            else:
-                zi, ci = _invert(z, cov)
-                views.setdefault(i, []).append((zi, ci, self.edge_kind[e]))
-        added: list[tuple[int, int, NDArray, NDArray, int]] = []
-        if len(views) > 1:
-            hub = m + 1 if m + 1 in views else max(views, key=lambda o: max(np.trace(_inv_sym(c)) for _, c, _ in
-                                                                              views[o]))
-            z_hub, c_hub, k_hub = _fuse(views[hub])
-            z_hm, c_hm = _invert(z_hub, c_hub)  # m seen from the hub
-            for o, vs in views.items():
-                if o == hub:
-                    continue
-                z_mo, c_mo, k_mo = _fuse(vs)
-                z, cov = _compose_cov(z_hm, c_hm, z_mo, c_mo)
-                kind = EDGE_LOOP if EDGE_LOOP in (k_hub, k_mo) else max(k_hub, k_mo)
-                added.append((hub, o, z, cov, kind))
-        self.edge_ij = [self.edge_ij[e] for e in keep]
-        self.edge_z = [self.edge_z[e] for e in keep]
-        self.edge_info = [self.edge_info[e] for e in keep]
-        self.edge_kind = [self.edge_kind[e] for e in keep]
-        self.poses = np.delete(self.poses, m, axis=0)
+        incident = [e for e, (i, j) in enumerate(self.edge_ij) if m in (i, j)]
+        nbrs = {o for e in incident for o in self.edge_ij[e]} - {m}
+        has_lower = {max(i, j) for i, j in self.edge_ij if m not in (i, j) and max(i, j) in nbrs}
+        earlier = [o for o in nbrs if o < m]
+        orphans = sorted(u for u in nbrs if u > m and u not in has_lower)
+        added: list[tuple[int, int, NDArray, NDArray]] = []
+        if earlier and orphans:
+            p = max(earlier)
+            z_pm, c_pm = self._view(incident, p, m)
+            for u in orphans:
+                z_mu, c_mu = self._view(incident, m, u)
+                _, cov = _compose_cov(z_pm, c_pm, z_mu, c_mu)
+                added.append((p, u, _relative(self.poses[p], self.poses[u]), cov))
+        gone = set(incident)
+        keep = [e for e in range(self.n_edges) if e not in gone]
 
         def shift(a: int) -> int:
             return a - 1 if a > m else a
 
-        self.edge_ij = [(shift(i), shift(j)) for i, j in self.edge_ij]
+        self.edge_ij = [(shift(self.edge_ij[e][0]), shift(self.edge_ij[e][1])) for e in keep]
+        self.edge_z = [self.edge_z[e] for e in keep]
+        self.edge_info = [self.edge_info[e] for e in keep]
+        self.edge_kind = [self.edge_kind[e] for e in keep]
+        self.poses = np.delete(self.poses, m, axis=0)
         out = []
-        for a, b, z, cov, kind in added:
-            a, b = shift(a), shift(b)
-            self.add_edge(a, b, z, _inv_sym(cov), kind)
-            out.append((a, b))
+        for a, b, z, cov in added:
+            self.add_edge(shift(a), shift(b), z, _inv_sym(cov), EDGE_SEQUENTIAL)
+            out.append((shift(a), shift(b)))
         return out
+
+    def _view(self, edges: list[int], a: int, b: int) -> tuple[NDArray, NDArray]:
+        """Pose of ``b`` in ``a``'s frame with its covariance, from the strongest edge among ``edges`` between
+        them (in either direction)."""
+        best: tuple[float, NDArray, NDArray] | None = None
+        for e in edges:
+            i, j = self.edge_ij[e]
+            if {i, j} != {a, b}:
+                continue
+            cov = _inv_sym(self.edge_info[e])
+            z, c = (self.edge_z[e], cov) if i == a else _invert(self.edge_z[e], cov)
+            if best is None or np.trace(c) < best[0]:
+                best = (float(np.trace(c)), z, c)
+        assert best is not None, f"no edge between {a} and {b}"
+        return best[1], best[2]
 
     def _arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         ij = np.asarray(self.edge_ij, dtype=np.int64).reshape(-1, 2)
@@ -301,16 +307,9 @@ def _compose_cov(a: NDArray, ca: NDArray, b: NDArray, cb: NDArray) -> tuple[NDAr
     return z, 0.5 * (cov + cov.T)
 
 
-def _fuse(views: list[tuple[NDArray, NDArray, int]]) -> tuple[NDArray, NDArray, int]:
-    """Several measurements of the same relative pose (a sequential and a loop edge between the same
-    two nodes): information-weighted mean, summed information; the strongest kind wins (loop > seq)."""
-    if len(views) == 1:
-        return views[0]
-    infos = [_inv_sym(c) for _, c, _ in views]
-    ref = views[0][0]
-    # average the angle as offsets from the first one, so +pi/-pi do not cancel
-    zs = [np.array([z[0], z[1], ref[2] + math.remainder(z[2] - ref[2], 2 * math.pi)]) for z, _, _ in views]
-    total = sum(infos)
-    z = np.linalg.solve(total, sum(i @ v for i, v in zip(infos, zs, strict=True)))
-    z[2] = math.remainder(z[2], 2 * math.pi)
-    return z, _inv_sym(total), max(k for _, _, k in views)
+
+def _relative(a: NDArray, b: NDArray) -> NDArray:
+    """Pose of b in the frame of a (kept local: the graph module depends on numpy alone)."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return np.array([c * dx + s * dy, -s * dx + c * dy, math.remainder(b[2] - a[2], 2 * math.pi)])
