@@ -34,11 +34,11 @@ class MappingRun:
 
 def run_mapping(world: World, rec: Recording, config: SlamConfig) -> MappingRun:
     eng = SlamEngine(config)
-    idx = []
-    for k, (scan, odom) in enumerate(zip(rec.scans, rec.odom, strict=True)):
-        if eng.process(scan, odom).integrated:
-            idx.append(k)
+    for scan, odom in zip(rec.scans, rec.odom, strict=True):
+        eng.process(scan, odom)
     eng.flush()  # after the last scan: draw the nodes still waiting for their re-render budget
+    # by stamp, not by "integrated": lifelong pruning removes old nodes the second lap re-observes
+    idx = [int(i) for i in np.searchsorted(rec.stamps, eng.node_stamps() - 1e-9)]
     return MappingRun(world, rec, eng, idx)
 
 
