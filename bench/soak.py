@@ -208,6 +208,8 @@ def main() -> int:
     finally:
         if sampler is not None:
             sampler.close()
+            if boot.running():  # the state at the end, not up to one period before it
+                sampler.samples.append(sampler.sample())
         if rpc is not None:
             rpc.close()
         leftovers = boot.stop()
