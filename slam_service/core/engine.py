@@ -21,7 +21,7 @@ from robonix_common.geometry import PoseArray, compose, inverse, relative, trans
 from robonix_common.grid import GridMap
 from robonix_common.scan import Scan
 
-from .lifelong import redundant_nodes
+from .lifelong import covered
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
 from .motion import StepWindows, legacy_jump, loop_radius, search_windows, suspect_step, unmatched_sigmas
@@ -33,6 +33,7 @@ from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
 
 log = logging.getLogger(__name__)
+PRUNE_PER_CALL = 4  # nodes lifelong pruning examines per new node (bounds the call; it falls behind rarely)
 Mode = Literal["mapping", "localization"]
 
 
@@ -76,7 +77,7 @@ class SlamEngine:
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
         self._running_built_at = 0
         self._last_loop_node = -10**9
-        self._closed_at = -10**9  # node of the last accepted loop closure (gates lifelong pruning)
+        self._prune_next = 1  # first node lifelong pruning has not examined yet
         self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
@@ -395,19 +396,26 @@ class SlamEngine:
 
     # ---------------------------------------------------------------- lifelong pruning
     def _prune(self, k: int) -> None:
-        """Remove the old nodes new node ``k`` makes redundant (see :mod:`.lifelong`). Only right after an
-        accepted loop closure (the new chain then agrees with the old map: a drifted chain must not
-        replace good nodes) and only among loop candidates (at least ``loop_min_chain_distance`` back
-        along the path and outside the running submap)."""
+        """Remove the nodes that just left the recent chain (at least ``loop_min_chain_distance`` back along
+        the path and outside the running submap) when an older node already covers their place (see
+        :mod:`.lifelong`): sequential matching and loop closure still see every node they use, and a
+        pass through mapped rooms leaves no nodes behind. At most ``PRUNE_PER_CALL`` checks per call."""
         c = self.config
-        if not c.prune_nodes or k - self._closed_at > c.prune_after_loop_nodes:
+        if not c.prune_nodes:
             return
         path = np.asarray(self._path)
         recent = np.flatnonzero(path[k] - path < c.loop_min_chain_distance)
         protect_from = min(k - c.running_buffer_size, int(recent[0]) if len(recent) else k)
-        for m in sorted(redundant_nodes(c, self.graph.poses, self._stamps, self._points, k, protect_from),
-                        reverse=True):  # highest index first: the lower ones keep their numbers
-            self._remove_node(m)
+        j = max(self._prune_next, 1)
+        for _ in range(PRUNE_PER_CALL):
+            if j >= protect_from:
+                break
+            if covered(c, self.graph.poses, self._points, j) is None:
+                j += 1
+                continue
+            self._remove_node(j)  # the next node moves down into j
+            protect_from -= 1
+        self._prune_next = j
 
     def _remove_node(self, m: int) -> None:
         """Forget node ``m``: its scan leaves the grid (exact: the grid stores sums), its edges are
@@ -429,7 +437,7 @@ class SlamEngine:
         def shift(i: int) -> int:
             return i - 1 if i > m else i
 
-        self._last_loop_node, self._closed_at = shift(self._last_loop_node), shift(self._closed_at)
+        self._last_loop_node, self._prune_next = shift(self._last_loop_node), shift(self._prune_next)
         self._running_built_at = shift(self._running_built_at)
         if self._loop_lookup is not None:  # keyed by node numbers: renumber, or drop if it drew m
             (nodes, opt), lookup = self._loop_lookup
@@ -568,7 +576,6 @@ class SlamEngine:
             return self._reject_loop("inconsistent after optimisation")
         self.stats.loop_closures += 1
         self._last_loop_node = k
-        self._closed_at = k
         self._optimize((res, elapsed))
         return True
 

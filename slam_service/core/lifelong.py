@@ -1,13 +1,19 @@
-"""Lifelong mapping: which old nodes a new node makes redundant.
+"""Lifelong mapping: which nodes add nothing to the map.
 
 A robot that works all day drives the same rooms again and again. Keeping every node makes the pose
 graph, the node scans, the optimiser's matrices, the loop-closure submaps and the saved session grow
-with the distance driven. Here a node is redundant once a newer node stands at nearly the same pose
-(position and heading) and sees nearly the same thing (most of the old scan's endpoints lie next to the
-new scan's): the old one adds nothing to the map the newer one does not, and the newer one reflects the
-world as it is now. The engine removes the redundant node (un-rendering its scan, reconnecting its edges
-through :meth:`PoseGraph.remove_node`), so node count is bounded by the mapped area times the headings
-the robot drives it at.
+with the distance driven. Here a node is redundant when another node stands at nearly the same pose
+(position and heading) and sees nearly the same thing (most of one scan's endpoints lie next to the
+other's): one of the two adds nothing to the map.
+
+Which of the two goes: the newer one, once it leaves the recent chain. Removing the *older* one was
+tried first: each lap then re-anchored the map on the previous lap's replacements and the error walked
+from generation to generation (MuJoCo apartment, 3 laps: ATE 0.7 -> 3.7 cm, IoU 0.97 -> 0.93). The
+first nodes of a place are matched against each other with the most loop closures, so they stay; a
+pass through mapped space leaves no nodes once it is more than the loop-closure chain distance behind.
+The engine removes the node (un-rendering its scan, reconnecting its chain through
+:meth:`PoseGraph.remove_node`), so node count is bounded by the mapped area times the headings the
+robot drives it at.
 """
 
 from __future__ import annotations
@@ -21,34 +27,31 @@ from robonix_common.geometry import transform_points
 
 from .types import SlamConfig
 
+MAX_TRIED = 3  # nearest older nodes whose overlap is checked (a cKDTree each)
 
-def redundant_nodes(config: SlamConfig, poses: NDArray, stamps: Sequence[float], points: Sequence[NDArray],
-                    k: int, protect_from: int) -> list[int]:
-    """Old nodes that node ``k`` makes redundant, oldest first (at most ``prune_max_per_node``).
 
-    Only nodes in ``1 .. protect_from - 1`` are considered: node 0 anchors the map frame, and the recent
-    chain (the running submap) must stay intact for sequential matching.
+def covered(config: SlamConfig, poses: NDArray, points: Sequence[NDArray], j: int) -> int | None:
+    """An older node (index < ``j``) that covers node ``j``'s place, or None.
+
+    Covers: within ``prune_distance`` and ``prune_heading`` of it, and at least ``prune_min_overlap`` of
+    ``j``'s scan endpoints lie within ``prune_overlap_distance`` of the older scan's (nearest first).
     """
     c = config
-    if protect_from <= 1:
-        return []
-    cand = np.arange(1, min(protect_from, len(poses)))
-    d = np.hypot(*(poses[cand, :2] - poses[k, :2]).T)
-    dth = np.abs(np.remainder(poses[cand, 2] - poses[k, 2] + np.pi, 2 * np.pi) - np.pi)
-    near = cand[(d <= c.prune_distance) & (dth <= c.prune_heading)]
+    if j <= 0:
+        return None
+    d = np.hypot(*(poses[:j, :2] - poses[j, :2]).T)
+    dth = np.abs(np.remainder(poses[:j, 2] - poses[j, 2] + np.pi, 2 * np.pi) - np.pi)
+    near = np.flatnonzero((d <= c.prune_distance) & (dth <= c.prune_heading))
     if len(near) == 0:
-        return []
-    near = near[np.argsort(np.asarray(stamps, dtype=float)[near], kind="stable")]
+        return None
     from scipy.spatial import cKDTree  # scipy is loaded by the first scan match already
 
-    tree = cKDTree(transform_points(poses[k], points[k]))
-    out: list[int] = []
-    for m in near:
-        if overlap(tree, transform_points(poses[m], points[m]), c.prune_overlap_distance) >= c.prune_min_overlap:
-            out.append(int(m))
-            if len(out) >= c.prune_max_per_node:
-                break
-    return out
+    mine = transform_points(poses[j], points[j])
+    for m in near[np.argsort(d[near], kind="stable")][:MAX_TRIED]:
+        tree = cKDTree(transform_points(poses[m], points[m]))
+        if overlap(tree, mine, c.prune_overlap_distance) >= c.prune_min_overlap:
+            return int(m)
+    return None
 
 
 def overlap(tree: object, pts: NDArray, distance: float) -> float:
