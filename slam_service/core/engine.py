@@ -410,7 +410,7 @@ class SlamEngine:
         for _ in range(PRUNE_PER_CALL):
             if j >= protect_from:
                 break
-            if covered(c, self.graph.poses, self._points, j) is None:
+            if not covered(c, self.graph.poses, self._points, j):
                 j += 1
                 continue
             self._remove_node(j)  # the next node moves down into j
