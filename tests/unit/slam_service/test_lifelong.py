@@ -42,13 +42,13 @@ def test_nodes_edges_and_scan_memory_stay_bounded(laps_run) -> None:
     _, _, eng, rows = laps_run
     print("per lap:", rows, "pruned", eng.stats.nodes_pruned)
     assert eng.stats.nodes_pruned > 0
-    first = rows[0]
-    for row in rows[1:]:  # laps 2..4 revisit only: at most 15 % over the first lap (not +100 % per lap)
-        assert row["nodes"] <= 1.15 * first["nodes"]
-        assert row["edges"] <= 1.3 * first["edges"]
-        assert row["scan_bytes"] <= 1.15 * first["scan_bytes"]
-    assert rows[-1]["nodes"] <= rows[1]["nodes"] * 1.05  # flat from lap to lap
-
+    first, second = rows[0], rows[1]
+    keep = eng.config.prune_min_covering  # views kept per place: the bound is about that many laps' nodes
+    for row in rows[2:]:  # laps 3 and 4 only revisit: flat from lap 2 on (not +1 lap of nodes per lap)
+        assert row["nodes"] <= 1.1 * second["nodes"]
+        assert row["edges"] <= 1.2 * second["edges"]
+        assert row["scan_bytes"] <= 1.1 * second["scan_bytes"]
+    assert rows[-1]["nodes"] <= (keep + 0.3) * first["nodes"]
 
 def test_map_and_trajectory_stay_consistent(laps_run) -> None:
     world, rec, eng, _ = laps_run
