@@ -410,10 +410,11 @@ class SlamEngine:
         for _ in range(PRUNE_PER_CALL):
             if j >= protect_from:
                 break
-            if not covered(c, self.graph.poses, self._points, j):
+            if not covered(c, self.graph.poses, path, self._points, j):
                 j += 1
                 continue
             self._remove_node(j)  # the next node moves down into j
+            path = np.delete(path, j)
             protect_from -= 1
         self._prune_next = j
 

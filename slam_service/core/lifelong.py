@@ -12,7 +12,8 @@ from generation to generation (MuJoCo apartment, 3 laps: ATE 0.7 -> 3.7 cm, IoU 
 first nodes of a place are matched against each other with the most loop closures, so they stay; a
 pass through mapped space leaves no nodes once it is more than the loop-closure chain distance behind.
 Keeping only one view per place cost map quality on the noisy two-lap bench (IoU 0.977 -> 0.941: half
-the hits per wall cell), so a place keeps ``prune_min_covering`` views (default 2).
+the hits per wall cell), so a place keeps views from ``prune_min_covering`` passes (default 2); nodes of
+one pass lie 0.2 m apart, so several of them near a place still count as one view.
 The engine removes the node (un-rendering its scan, reconnecting its chain through
 :meth:`PoseGraph.remove_node`), so node count is bounded by the mapped area times the headings the
 robot drives it at.
@@ -29,14 +30,16 @@ from robonix_common.geometry import transform_points
 
 from .types import SlamConfig
 
-MAX_EXTRA_TRIED = 2  # nearest older nodes checked beyond the ones needed (a cKDTree each)
+MAX_TRIED = 8  # nearest older nodes looked at (an overlap check, a cKDTree, for one per pass)
+PASS_GAP = 4.0  # nodes closer than this many prune_distance along the path are one pass
 
 
-def covered(config: SlamConfig, poses: NDArray, points: Sequence[NDArray], j: int) -> bool:
-    """Whether ``prune_min_covering`` older nodes (index < ``j``) cover node ``j``'s place.
+def covered(config: SlamConfig, poses: NDArray, path: NDArray, points: Sequence[NDArray], j: int) -> bool:
+    """Whether older nodes (index < ``j``) from ``prune_min_covering`` distinct passes cover node ``j``'s place.
 
     Covers: within ``prune_distance`` and ``prune_heading`` of it, and at least ``prune_min_overlap`` of
-    ``j``'s scan endpoints lie within ``prune_overlap_distance`` of the older scan's (nearest first).
+    ``j``'s scan endpoints lie within ``prune_overlap_distance`` of the older scan's. Passes are told
+    apart by path distance: consecutive nodes of one pass (0.2 m apart) are not two views of the place.
     """
     c = config
     need = c.prune_min_covering
@@ -45,17 +48,19 @@ def covered(config: SlamConfig, poses: NDArray, points: Sequence[NDArray], j: in
     d = np.hypot(*(poses[:j, :2] - poses[j, :2]).T)
     dth = np.abs(np.remainder(poses[:j, 2] - poses[j, 2] + np.pi, 2 * np.pi) - np.pi)
     near = np.flatnonzero((d <= c.prune_distance) & (dth <= c.prune_heading))
-    if len(near) < need:
+    if len(near) == 0:
         return False
     from scipy.spatial import cKDTree  # scipy is loaded by the first scan match already
 
     mine = transform_points(poses[j], points[j])
-    found = 0
-    for m in near[np.argsort(d[near], kind="stable")][:need + MAX_EXTRA_TRIED]:
+    passes: list[float] = []  # path distance of one covering node per pass found
+    for m in near[np.argsort(d[near], kind="stable")][:MAX_TRIED]:
+        if any(abs(path[m] - p) <= PASS_GAP * c.prune_distance for p in passes):
+            continue
         tree = cKDTree(transform_points(poses[m], points[m]))
         if overlap(tree, mine, c.prune_overlap_distance) >= c.prune_min_overlap:
-            found += 1
-            if found >= need:
+            passes.append(float(path[m]))
+            if len(passes) >= need:
                 return True
     return False
 

@@ -126,8 +126,8 @@ class SlamConfig:
     prune_min_overlap: float = param(0.7, ge=0, le=1, doc="... and this fraction of its scan endpoints lies within "
                                      "prune_overlap_distance of the older scan's")
     prune_overlap_distance: float = param(0.1, gt=0, le=1.0, doc="m; endpoint distance counted as overlap")
-    prune_min_covering: int = param(2, ge=1, le=100, doc="older nodes that must cover a place before a newer node "
-                                    "there is dropped: the map keeps this many views of each place and heading")
+    prune_min_covering: int = param(2, ge=1, le=100, doc="passes whose older nodes must cover a place before a newer "
+                                    "node there is dropped: the map keeps this many views of each place and heading")
     # stamps
     reorder_window_s: float = param(0.3, ge=0, le=5.0, doc="s; scans up to this late are sorted into stamp order "
                                     "(output delayed by at most this); later ones are skipped")
