@@ -13,7 +13,7 @@ from slam_service.core.posegraph import EDGE_LOOP, PoseGraph
 
 from .conftest import DRIFT
 
-LAPS = 4
+LAPS = 5
 
 
 def _ring(laps: int) -> World:
@@ -42,13 +42,13 @@ def test_nodes_edges_and_scan_memory_stay_bounded(laps_run) -> None:
     _, _, eng, rows = laps_run
     print("per lap:", rows, "pruned", eng.stats.nodes_pruned)
     assert eng.stats.nodes_pruned > 0
-    first, second = rows[0], rows[1]
-    keep = eng.config.prune_min_covering  # views kept per place: the bound is about that many laps' nodes
-    for row in rows[2:]:  # laps 3 and 4 only revisit: flat from lap 2 on (not +1 lap of nodes per lap)
-        assert row["nodes"] <= 1.1 * second["nodes"]
-        assert row["edges"] <= 1.2 * second["edges"]
-        assert row["scan_bytes"] <= 1.1 * second["scan_bytes"]
-    assert rows[-1]["nodes"] <= (keep + 0.3) * first["nodes"]
+    first, third = rows[0], rows[2]
+    keep = eng.config.prune_min_covering  # passes kept per place: the bound is about that many laps' nodes
+    for row in rows[3:]:  # laps 4 and 5 only revisit: flat from lap 3 on (not +1 lap of nodes per lap)
+        assert row["nodes"] <= 1.05 * third["nodes"]
+        assert row["edges"] <= 1.1 * third["edges"]
+        assert row["scan_bytes"] <= 1.05 * third["scan_bytes"]
+    assert max(r["nodes"] for r in rows) <= (keep + 0.3) * first["nodes"]
 
 def test_map_and_trajectory_stay_consistent(laps_run) -> None:
     world, rec, eng, _ = laps_run
