@@ -79,6 +79,9 @@ def install_engine_log_filter() -> None:
         eng.addFilter(EngineLogFilter())
 
 
+RECENT_PROCESS_CALLS = 1000  # process() calls the status percentiles cover (100 s of scans at 10 Hz)
+
+
 @dataclass(frozen=True)
 class ScanTiming:
     """Where one processed scan's time went (wall s): waiting in the queue, then inside the worker."""
@@ -143,6 +146,8 @@ class SlamLoop:
         self.counters["scans_dropped_behind"] = 0
         self.counters["process_over_100ms"] = 0
         self.process_ms_max = 0.0  # slowest SlamEngine.process call so far (wall ms)
+        # the latest calls' cost, for percentiles in the status (a soak watches p99 stay flat); bounded
+        self._process_ms: collections.deque[float] = collections.deque(maxlen=RECENT_PROCESS_CALLS)
         self._subs = [
             node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan, bindings["scan"].qos),
             node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom, bindings["odom"].qos),
@@ -256,6 +261,7 @@ class SlamLoop:
     def _note_process_time(self, ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
         self.process_ms_max = max(self.process_ms_max, ms)
+        self._process_ms.append(ms)
         if ms > 100.0:
             self.counters["process_over_100ms"] += 1
 
@@ -381,9 +387,14 @@ class SlamLoop:
         with self.lock:
             engine = self.engine.stats.to_dict()
             mode = self.engine.mode
+            nodes = self.engine.graph.n_nodes
+            recent = np.asarray(self._process_ms, dtype=float)
+        pct = {f"process_ms_p{q}": round(float(np.percentile(recent, q)), 1) if recent.size else None
+               for q in (50, 99)}
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
-                "process_ms_max": round(self.process_ms_max, 1), "queue_size": self._queue.size,
-                "queue_depth": len(self._queue), "queue_high_water": self._queue.high_water, "engine": engine}
+                "process_ms_max": round(self.process_ms_max, 1), **pct, "process_ms_window": int(recent.size),
+                "queue_size": self._queue.size, "queue_depth": len(self._queue),
+                "queue_high_water": self._queue.high_water, "nodes": nodes, "engine": engine}
 
     def close(self, reason: str = "") -> None:
         self._stop.set()

@@ -21,6 +21,7 @@ from robonix_common.geometry import PoseArray, compose, inverse, relative, trans
 from robonix_common.grid import GridMap
 from robonix_common.scan import Scan
 
+from .lifelong import covered
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
 from .motion import (
@@ -40,6 +41,7 @@ from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
 
 log = logging.getLogger(__name__)
+PRUNE_PER_CALL = 4  # nodes lifelong pruning examines per new node (bounds the call; it falls behind rarely)
 Mode = Literal["mapping", "localization"]
 
 
@@ -83,7 +85,8 @@ class SlamEngine:
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
         self._running_built_at = 0
         self._last_loop_node = -10**9
-        self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count), lookup
+        self._prune_next = 1  # first node lifelong pruning has not examined yet
+        self._loop_lookup: tuple[tuple, LookupGrid] | None = None  # (submap nodes, optimisation count, window), lookup
         self._resume_from: int | None = None  # node to link the first new node to after a session load
         self._map_cache: GridMap | None = None
         self._reorder: ReorderBuffer[tuple[Scan, PoseArray]] = ReorderBuffer(c.reorder_window_s,
@@ -398,8 +401,61 @@ class SlamEngine:
                 self._drift = self._drift_theta = 0.0
         if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
             self._render_pending()
+        self._prune(k)
         self.stats.scans_integrated += 1
         return self._update(True, True, response=response, loop=loop)
+
+    # ---------------------------------------------------------------- lifelong pruning
+    def _prune(self, k: int) -> None:
+        """Remove the nodes that just left the recent chain (at least ``loop_min_chain_distance`` back along
+        the path and outside the running submap) when an older node already covers their place (see
+        :mod:`.lifelong`): sequential matching and loop closure still see every node they use, and a
+        pass through mapped rooms leaves no nodes behind. At most ``PRUNE_PER_CALL`` checks per call."""
+        c = self.config
+        if not c.prune_nodes:
+            return
+        path = np.asarray(self._path)
+        recent = np.flatnonzero(path[k] - path < c.loop_min_chain_distance)
+        protect_from = min(k - c.running_buffer_size, int(recent[0]) if len(recent) else k)
+        j = max(self._prune_next, 1)
+        for _ in range(PRUNE_PER_CALL):
+            if j >= protect_from:
+                break
+            if not covered(c, self.graph.poses, path, self._points, j):
+                j += 1
+                continue
+            self._remove_node(j)  # the next node moves down into j
+            path = np.delete(path, j)
+            protect_from -= 1
+        self._prune_next = j
+
+    def _remove_node(self, m: int) -> None:
+        """Forget node ``m``: its scan leaves the grid (exact: the grid stores sums), its edges are
+        reconnected through a neighbour, and every per-node list and index shifts down past it."""
+        if m < len(self._rendered):
+            old = self._rendered[m]
+            self.grid.integrate(transform_points(old, self._origins[m][None])[0],
+                                transform_points(old, self._points[m]), weight=-1.0)
+            if m in self._free:
+                self._clear_free(m, old, -1.0)
+            del self._rendered[m]
+        self.graph.remove_node(m)
+        for lst in (self._odom, self._stamps, self._path, self._points, self._origins):
+            del lst[m]
+        self._free = {(i - 1 if i > m else i): v for i, v in self._free.items() if i != m}
+        self._pending = [i - 1 if i > m else i for i in self._pending if i != m]
+        self.stats.map_nodes_pending = len(self._pending)
+
+        def shift(i: int) -> int:
+            return i - 1 if i > m else i
+
+        self._last_loop_node, self._prune_next = shift(self._last_loop_node), shift(self._prune_next)
+        self._running_built_at = shift(self._running_built_at)
+        if self._loop_lookup is not None:  # keyed by node numbers: renumber, or drop if it drew m
+            (nodes, *rest), lookup = self._loop_lookup
+            self._loop_lookup = None if m in nodes else ((tuple(shift(i) for i in nodes), *rest), lookup)
+        self._map_cache = None
+        self.stats.nodes_pruned += 1
 
     def _match_step(self, points: NDArray, predicted: PoseArray,
                     n: int) -> tuple[PoseArray, NDArray | None, int, float]:

@@ -69,6 +69,68 @@ class PoseGraph:
         for lst in (self.edge_ij, self.edge_z, self.edge_info, self.edge_kind):
             lst.pop()
 
+    def remove_node(self, m: int) -> list[tuple[int, int]]:
+        """Remove node ``m``, keeping the graph connected and its current shape (lifelong pruning).
+
+        Why this way: re-expressing all of a removed node's edges through one neighbour (a star) makes that
+        neighbour inherit them; when old nodes are pruned one after another along their chain the survivor
+        collects every loop edge of the pass (degree 25+ seen) and composite edges of composites skew the
+        map. Instead, every later neighbour ``u`` of ``m`` that has no other earlier neighbour (normally just
+        the next node of the chain) gets an edge from ``m``'s latest earlier neighbour ``p``: its measurement
+        is the *current* relative pose of the two (the optimised geometry, loop corrections included, is
+        kept exactly: zero residual), its covariance the first-order composition of the two edges through
+        ``m`` (the chain's stiffness). ``m``'s other edges (loop closures) go with it; their correction is
+        already in the poses. Every node keeps an earlier neighbour, so the graph stays connected to node 0,
+        which anchors the gauge and cannot be removed. Returns the added edges (indices after removal).
+        """
+        n = self.n_nodes
+        if not 0 < m < n:
+            raise ValueError(f"cannot remove node {m} (have {n}; node 0 anchors the map)")
+        incident = [e for e, (i, j) in enumerate(self.edge_ij) if m in (i, j)]
+        nbrs = {o for e in incident for o in self.edge_ij[e]} - {m}
+        has_lower = {max(i, j) for i, j in self.edge_ij if m not in (i, j) and max(i, j) in nbrs}
+        earlier = [o for o in nbrs if o < m]
+        orphans = sorted(u for u in nbrs if u > m and u not in has_lower)
+        added: list[tuple[int, int, NDArray, NDArray]] = []
+        if earlier and orphans:
+            p = max(earlier)
+            z_pm, c_pm = self._view(incident, p, m)
+            for u in orphans:
+                z_mu, c_mu = self._view(incident, m, u)
+                _, cov = _compose_cov(z_pm, c_pm, z_mu, c_mu)
+                added.append((p, u, _relative(self.poses[p], self.poses[u]), cov))
+        gone = set(incident)
+        keep = [e for e in range(self.n_edges) if e not in gone]
+
+        def shift(a: int) -> int:
+            return a - 1 if a > m else a
+
+        self.edge_ij = [(shift(self.edge_ij[e][0]), shift(self.edge_ij[e][1])) for e in keep]
+        self.edge_z = [self.edge_z[e] for e in keep]
+        self.edge_info = [self.edge_info[e] for e in keep]
+        self.edge_kind = [self.edge_kind[e] for e in keep]
+        self.poses = np.delete(self.poses, m, axis=0)
+        out = []
+        for a, b, z, cov in added:
+            self.add_edge(shift(a), shift(b), z, _inv_sym(cov), EDGE_SEQUENTIAL)
+            out.append((shift(a), shift(b)))
+        return out
+
+    def _view(self, edges: list[int], a: int, b: int) -> tuple[NDArray, NDArray]:
+        """Pose of ``b`` in ``a``'s frame with its covariance, from the strongest edge among ``edges`` between
+        them (in either direction)."""
+        best: tuple[float, NDArray, NDArray] | None = None
+        for e in edges:
+            i, j = self.edge_ij[e]
+            if {i, j} != {a, b}:
+                continue
+            cov = _inv_sym(self.edge_info[e])
+            z, c = (self.edge_z[e], cov) if i == a else _invert(self.edge_z[e], cov)
+            if best is None or np.trace(c) < best[0]:
+                best = (float(np.trace(c)), z, c)
+        assert best is not None, f"no edge between {a} and {b}"
+        return best[1], best[2]
+
     def _arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         ij = np.asarray(self.edge_ij, dtype=np.int64).reshape(-1, 2)
         return ij[:, 0], ij[:, 1], np.asarray(self.edge_z).reshape(-1, 3), np.asarray(self.edge_info).reshape(-1, 3, 3)
@@ -208,3 +270,46 @@ def _normal_equations(n: int, i: NDArray, j: NDArray, e: NDArray, a: NDArray, b:
     np.add.at(g, (3 * i[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", at_o, e).ravel())
     np.add.at(g, (3 * j[:, None] + np.arange(3)).ravel(), np.einsum("eil,el->ei", bt_o, e).ravel())
     return h, g
+
+
+def _inv_sym(a: NDArray) -> NDArray:
+    """Inverse of a symmetric positive definite 3x3 (information <-> covariance), symmetrised."""
+    b = np.linalg.inv(0.5 * (a + a.T))
+    return 0.5 * (b + b.T)
+
+
+def _rot(t: float) -> NDArray:
+    c, s = math.cos(t), math.sin(t)
+    return np.array([[c, -s], [s, c]])
+
+
+def _invert(z: NDArray, cov: NDArray) -> tuple[NDArray, NDArray]:
+    """z = pose of b in frame a with covariance in frame a -> pose of a in frame b, covariance in frame b."""
+    r = _rot(z[2])
+    t = -r.T @ z[:2]
+    j = np.zeros((3, 3))
+    j[:2, :2] = -r.T
+    j[:2, 2] = (t[1], -t[0])  # d(-R^T t_z)/dtheta, written in the inverted translation t
+    j[2, 2] = -1.0
+    return np.array([t[0], t[1], -z[2]]), j @ cov @ j.T
+
+
+def _compose_cov(a: NDArray, ca: NDArray, b: NDArray, cb: NDArray) -> tuple[NDArray, NDArray]:
+    """a (b in frame h) o b (c in frame b): c in frame h, covariance by first-order propagation."""
+    r = _rot(a[2])
+    tb = r @ b[:2]
+    z = np.array([a[0] + tb[0], a[1] + tb[1], math.remainder(a[2] + b[2], 2 * math.pi)])
+    ja = np.eye(3)
+    ja[0, 2], ja[1, 2] = -tb[1], tb[0]
+    jb = np.eye(3)
+    jb[:2, :2] = r
+    cov = ja @ ca @ ja.T + jb @ cb @ jb.T
+    return z, 0.5 * (cov + cov.T)
+
+
+
+def _relative(a: NDArray, b: NDArray) -> NDArray:
+    """Pose of b in the frame of a (kept local: the graph module depends on numpy alone)."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return np.array([c * dx + s * dy, -s * dx + c * dy, math.remainder(b[2] - a[2], 2 * math.pi)])

@@ -123,6 +123,17 @@ class SlamConfig:
                                     "(1 % cost 0.4 cm ATE on the hard sim loop: more, weaker candidates)")
     no_return_clear_range: float = param(3.0, ge=0, le=100.0, doc="m; beams with no return (the range_max "
                                          "sentinel or +inf) clear free space this far, never a hit; 0 = off")
+    # lifelong mapping: nodes bounded by the mapped area, not the distance driven
+    prune_nodes: bool = param(True, doc="a node whose place an older node already covers is removed once it leaves "
+                              "the recent chain (its chain reconnected), so the graph, the node scans and the session "
+                              "stay proportional to the mapped area")
+    prune_distance: float = param(0.3, gt=0, le=5.0, doc="m; an older node this close to a node covers it ...")
+    prune_heading: float = param(0.5, gt=0, le=math.pi, doc="rad; ... if also facing within this")
+    prune_min_overlap: float = param(0.7, ge=0, le=1, doc="... and this fraction of its scan endpoints lies within "
+                                     "prune_overlap_distance of the older scan's")
+    prune_overlap_distance: float = param(0.1, gt=0, le=1.0, doc="m; endpoint distance counted as overlap")
+    prune_min_covering: int = param(2, ge=1, le=100, doc="passes whose older nodes must cover a place before a newer "
+                                    "node there is dropped: the map keeps this many views of each place and heading")
     # stamps
     reorder_window_s: float = param(0.3, ge=0, le=5.0, doc="s; scans up to this late are sorted into stamp order "
                                     "(output delayed by at most this); later ones are skipped")
@@ -183,6 +194,7 @@ class SlamStats:
     match_failures: int = 0  # fell back to odometry
     loop_closures: int = 0
     loop_rejected: int = 0
+    nodes_pruned: int = 0  # nodes removed because an older node covers the same place (lifelong mapping)
     optimizations: int = 0
     last_warning: str = ""
     map_nodes_rerendered: int = 0  # node scans re-drawn at their optimised pose (spread over calls)
