@@ -15,22 +15,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 import tracemalloc
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from hal_panda_mobile.files import load_robot_description, load_scene
-from hal_panda_mobile.sim import PandaMobileSim
-from robonix_eval.slam_loop import LOOPS, REALISTIC, ScriptedDriver
+from robonix_eval.slam_loop import LOOPS, REALISTIC, drive_loop
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "bench" / "results" / "slam_lifelong.json"
+LEG_TIMEOUT_S = 40.0  # a leg not finished in this sim time means the drive is stuck: stop there
 
 
 def structure_bytes(eng: SlamEngine) -> dict[str, int]:
@@ -55,54 +54,45 @@ def lap_row(eng: SlamEngine, lap: int, driven: float, lat: list[float], t_wall: 
 
 
 def run(laps: int, speed: float, prune: bool, seed: int) -> dict[str, Any]:
-    robot = load_robot_description()
-    st = REALISTIC
-    sim = PandaMobileSim(robot, load_scene("apartment"), seed=seed, odom_noise=st.odom_noise,
-                         lidar_noise=st.lidar_noise)
     cfg = SlamConfig()
     if not prune and hasattr(cfg, "prune_nodes"):
         cfg = SlamConfig.from_dict({**cfg.to_dict(), "prune_nodes": False})
+    # The shared evaluation drive (robonix_eval.slam_loop.drive_loop), full 360-beam realistic lidar, driving
+    # the apartment loop ``laps`` times in a row; a lap ends each time the route's last waypoint is reached.
+    st = replace(REALISTIC, speed=speed, beam_step=1, max_range=None, slam_config=cfg)
     eng = SlamEngine(cfg)
-    mx, my, _, myaw = robot.lidar.mount
-    x0, y0, *_ = sim.ground_truth()
     route = list(LOOPS["apartment"])
-    ctrl_every = max(1, round(0.05 / sim.timestep))
-    scan_every = max(1, round(0.1 / sim.timestep))
     gt_at: dict[float, tuple[float, float, float]] = {}
-    rows, lat = [], []
-    driven, last = 0.0, (x0, y0)
-    tracemalloc.start()
+    rows: list[dict[str, Any]] = []
+    lat: list[float] = []
     t0 = time.perf_counter()
-    for lap in range(1, laps + 1):
-        driver = ScriptedDriver(last, route, speed)
-        step, lat = 0, []
-        while not driver.done:
-            sim.step(ctrl_every)
-            step += ctrl_every
-            x, y, yaw, *_ = sim.ground_truth()
-            driven += math.hypot(x - last[0], y - last[1])
-            last = (x, y)
-            if step % scan_every == 0:
-                s, o = sim.scan(), sim.odometry()
-                gt_at[round(s.stamp, 6)] = (x, y, yaw)
-                scan = Scan(np.asarray(s.ranges, dtype=np.float32), s.angle_min, s.angle_increment, s.range_min,
-                            s.range_max, s.stamp, (mx, my, myaw), s.frame_id)
-                t1 = time.perf_counter()
-                eng.process(scan, (o.x, o.y, o.yaw), s.stamp)
-                lat.append(time.perf_counter() - t1)
-            sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
-        row = lap_row(eng, lap, driven, lat, time.perf_counter() - t0)
+
+    def feed(scan: Scan, odom: tuple[float, float, float], gt: tuple[float, float, float]) -> None:
+        if not tracemalloc.is_tracing():  # the heap figure is SLAM's, not the sim's set-up
+            tracemalloc.start()
+        gt_at[round(scan.stamp, 6)] = gt
+        t1 = time.perf_counter()
+        eng.process(scan, odom, scan.stamp)
+        lat.append(time.perf_counter() - t1)
+
+    def lap_done(reached: int, driven: float) -> None:
+        if reached % len(route):
+            return
+        row = lap_row(eng, reached // len(route), driven, lat, time.perf_counter() - t0)
         gt = np.array([gt_at[round(float(t), 6)] for t in eng.node_stamps()]).reshape(-1, 3)
         err = np.hypot(*(eng.trajectory()[:, :2] - gt[:, :2]).T)
         row["ate_m"], row["max_err_m"] = round(ate_rmse(eng.trajectory(), gt), 4), round(float(err.max()), 3)
         rows.append(row)
         print(json.dumps(row), flush=True)
-    sim.stop()
+        lat.clear()
+
+    drive, truth = drive_loop("apartment", st, seed, route * laps, LEG_TIMEOUT_S, feed, lap_done)
     eng.flush()
     tracemalloc.stop()
+    if not drive.completed:
+        print(f"drive stopped early: {drive.reached}/{drive.waypoints} waypoints", flush=True)
     stamps = [round(float(t), 6) for t in eng.node_stamps()]
     gt = np.array([gt_at[t] for t in stamps]).reshape(-1, 3)
-    truth = sim.ground_truth_grid(cfg.resolution, min_height=robot.lidar.mount[2])
     final = {"ate_m": round(ate_rmse(eng.trajectory(), gt), 4),
              "iou": round(occupied_iou(eng.map(), truth, tolerance_cells=1, observed_only=True), 4)}
     print(json.dumps(final), flush=True)

@@ -194,11 +194,13 @@ class LoopRecording:
     config: SlamConfig  # the SLAM config of the setting
 
 
-def _drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_timeout: float,
-                on_scan: Callable[[Scan, tuple[float, float, float], tuple[float, float, float]], None]
-                ) -> tuple[DriveResult, GridMap]:
-    """Drive ``wps`` in the sim; ``on_scan(scan, odom, gt)`` at each 10 Hz lidar scan. Returns how the
-    drive went and the ground-truth grid at the config's resolution."""
+def drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_timeout: float,
+               on_scan: Callable[[Scan, tuple[float, float, float], tuple[float, float, float]], None],
+               on_waypoint: Callable[[int, float], None] | None = None) -> tuple[DriveResult, GridMap]:
+    """Drive ``wps`` in the sim; ``on_scan(scan, odom, gt)`` at each 10 Hz lidar scan and, if given,
+    ``on_waypoint(reached, driven_m)`` each time a waypoint is reached (so a caller driving a route several
+    times can cut the drive into laps). Returns how the drive went and the ground-truth grid at the
+    config's resolution. The one sim drive loop of the SLAM evaluations and benches."""
     robot = load_robot_description()
     sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=st.odom_noise, lidar_noise=st.lidar_noise)
     cfg = st.slam_config or SlamConfig()
@@ -225,11 +227,13 @@ def _drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg
             scan = Scan(ranges, s.angle_min, s.angle_increment * st.beam_step, s.range_min, range_max, s.stamp,
                         mount, s.frame_id)
             on_scan(scan, (o.x, o.y, o.yaw), (x, y, yaw))
-        if driver.i != leg:
+        sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
+        if driver.i != leg:  # checked right after the command so the last waypoint is reported too
             leg, leg_t0 = driver.i, sim.time
+            if on_waypoint is not None:
+                on_waypoint(leg, driven)
         elif sim.time - leg_t0 > leg_timeout:  # stuck (should never happen): give up on the rest
             break
-        sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
     sim.stop()
     drive = DriveResult(len(wps), driver.i, len(sim.collisions()), driven, sim.time, driver.max_track_error)
     return drive, sim.ground_truth_grid(cfg.resolution, min_height=robot.lidar.mount[2])
@@ -250,7 +254,7 @@ def record_loop(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
         odom.append(o)
         gt.append(g)
 
-    drive, truth = _drive_loop(scene, st, seed, list(route or LOOPS[scene]), leg_timeout, keep)
+    drive, truth = drive_loop(scene, st, seed, list(route or LOOPS[scene]), leg_timeout, keep)
     return LoopRecording(scene, st.name, seed, scans, np.asarray(odom, dtype=float).reshape(-1, 3),
                          np.asarray(gt, dtype=float).reshape(-1, 3), drive, truth, st.slam_config or SlamConfig())
 
@@ -278,7 +282,7 @@ def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = Fals
             latencies[lc].append(time.perf_counter() - t0)
             seconds[lc] += latencies[lc][-1]
 
-    drive, truth = _drive_loop(scene, st, seed, wps, leg_timeout, feed)
+    drive, truth = drive_loop(scene, st, seed, wps, leg_timeout, feed)
     out = []
     for lc, eng in engines.items():
         eng.flush()  # the map may lag the optimised poses by a few calls' re-render budget: score the final map
