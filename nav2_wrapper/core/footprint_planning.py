@@ -10,10 +10,17 @@ gap the inscribed disc fits but the rectangle does not must be replaced by a dif
 patch on the same one. If the lattice search fails too (e.g. the map is still mostly unknown, or the window is
 too small), the 2D path is kept: the controller's own footprint checks and the recoveries still apply, and the
 next replan sees more of the map.
+
+The search's result is kept between replans: at the next (1 Hz) replan, when the 2D path still has a point
+without a fitting heading, the rest of the previous SE(2) path — from the pose nearest the robot on, each pose
+at its own heading — is looked up in the current collision grids, and if every pose still fits it is kept
+instead of searching again. A search costs hundreds of milliseconds; the lookup costs what the heading check
+of the 2D path costs. A 2D path that fits is still preferred (it follows map changes for free).
 """
 
 from __future__ import annotations
 
+import math
 import statistics
 from dataclasses import dataclass, field, replace
 
@@ -34,12 +41,13 @@ class FallbackStats:
 
     runs: int = 0
     found: int = 0
+    reuses: int = 0
     seconds: list[float] = field(default_factory=list)
     last: Se2Plan | None = None
 
     def summary(self) -> dict[str, float]:
         s = self.seconds
-        return {"se2_runs": self.runs, "se2_found": self.found,
+        return {"se2_runs": self.runs, "se2_found": self.found, "se2_reuses": self.reuses,
                 "se2_median_s": statistics.median(s) if s else 0.0, "se2_max_s": max(s) if s else 0.0}
 
 
@@ -53,6 +61,7 @@ class FootprintAwarePlanner:
         # half the costmap cells' spacing of the usual heading assignment
         self.headings_cfg = HeadingConfig(bins=planner.cfg.se2.bins, spacing=0.05)
         self.stats = FallbackStats()
+        self._kept: _KeptPath | None = None
 
     def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult) -> PlanResult:
         """``res`` itself when the footprint fits along it at some heading everywhere (or the fallback is off),
@@ -66,7 +75,13 @@ class FootprintAwarePlanner:
         # the search would only escape from it, so it is no reason to replace the plan
         ok[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) <= cfg.se2.escape_radius] = True
         if headings_over(pts, ok, self.headings_cfg).feasible:
+            self._kept = None
             return res
+        kept = self._still_valid(costmap, pose, goal)
+        if kept is not None:
+            self.stats.reuses += 1
+            return replace(res, path=kept[0], headings=kept[1], length=_length(kept[0]))
+        self._kept = None
         plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
                              self.planner.traversal_table(), cfg.tolerance, guide=res.path)
         self.stats.runs += 1
@@ -75,5 +90,41 @@ class FootprintAwarePlanner:
         if not plan.ok:
             return res
         self.stats.found += 1
+        self._kept = _KeptPath((float(goal[0]), float(goal[1])), plan.path, np.asarray(plan.headings))
         return replace(res, path=plan.path, headings=np.asarray(plan.headings), length=plan.length,
                        expansions=res.expansions + plan.expansions)
+
+    def forget(self) -> None:
+        """Drop the kept SE(2) path (a new goal, or the run ended)."""
+        self._kept = None
+
+    def _still_valid(self, costmap: Costmap, pose: Pose2D,
+                     goal: tuple[float, float]) -> tuple[np.ndarray, np.ndarray] | None:
+        """The rest of the kept SE(2) path from the robot on (path, headings) if it was planned to this goal,
+        the robot is still near it, and every pose of it fits the current collision grids at its heading."""
+        kept, cfg = self._kept, self.planner.cfg.se2
+        if kept is None or math.hypot(kept.goal[0] - goal[0], kept.goal[1] - goal[1]) > 1e-6:
+            return None
+        d = np.hypot(kept.path[:, 0] - pose[0], kept.path[:, 1] - pose[1])
+        i = int(np.argmin(d))
+        if d[i] > cfg.reuse_deviation or len(kept.path) - i < 2:
+            return None
+        path, headings = kept.path[i:].copy(), kept.headings[i:]
+        path[0] = pose[0], pose[1]
+        bins = np.round(np.mod(headings, math.pi) / (math.pi / cfg.bins)).astype(np.int64) % cfg.bins
+        fits = self.se2.feasible_bins(costmap, path)[np.arange(len(path)), bins]
+        fits[np.hypot(path[:, 0] - pose[0], path[:, 1] - pose[1]) <= cfg.escape_radius] = True
+        return (path, headings) if bool(fits.all()) else None
+
+
+@dataclass
+class _KeptPath:
+    """The last SE(2) path found, with the goal it leads to."""
+
+    goal: tuple[float, float]
+    path: np.ndarray
+    headings: np.ndarray
+
+
+def _length(path: np.ndarray) -> float:
+    return float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0

@@ -386,6 +386,7 @@ class Navigator:
         return Command(0.0, 0.0, 0.0, rec.state, rec.detail, rec.run_id)
 
     def _reset_run(self) -> None:
+        self.footprint_planner.forget()
         self.recovery.reset()
         self.goal_checker.reset()
         self.progress.reset()

@@ -51,6 +51,9 @@ class Se2PlannerConfig:
                                            "per cell and heading bin)", ge=1000)
     max_expansions: int = param(3_000_000, "the search gives up after expanding this many states", ge=1000)
     heuristic_weight: float = param(1.0, "weighted A* on the SE(2) lattice (1: cost-optimal)", ge=1.0)
+    reuse_deviation: float = param(0.5, "the previous SE(2) path is kept at a replan only while the robot is "
+                                        "within this distance of it (and every pose of its rest still fits)",
+                                   unit="m", ge=0)
     escape_radius: float = param(0.15, "how far from the start blocked states may be crossed (a body touching "
                                        "a noise speckle must be able to leave)", unit="m", ge=0)
 

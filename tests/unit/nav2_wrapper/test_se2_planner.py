@@ -215,3 +215,31 @@ def test_the_distance_shortcut_leaves_the_collision_grids_unchanged(posts: int,
         (lethal.shape[0] - 2 * pad, lethal.shape[1] - 2 * pad), 2, np.uint8))
     assert np.array_equal(fast, planner.blocked_grids(cm, win))
     assert fast.any() == (posts > 0)
+
+
+def test_a_still_fitting_se2_path_is_reused_at_the_next_replan_and_searched_again_once_blocked() -> None:
+    cm = _world(slot=True)
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    first = fap.refine(cm, START, GOAL, gp.plan(cm, START[:2], GOAL))
+    assert fap.stats.runs == 1
+    assert first.headings is not None
+    k = 6                                  # near the start: the 2D plan from here still takes the dogleg
+    pose = (float(first.path[k, 0]), float(first.path[k, 1]), float(first.headings[k]))
+    again = fap.refine(cm, pose, GOAL, gp.plan(cm, pose[:2], GOAL))
+    assert (fap.stats.runs, fap.stats.reuses) == (1, 1)
+    assert np.allclose(again.path, first.path[k:])
+    assert np.allclose(again.headings, first.headings[k:])
+    assert again.length < first.length
+    # the slot closes: the kept path no longer fits, so the search runs again (and finds no route)
+    g = np.where(cm.static == LETHAL, 100, 0).astype(np.int8)
+    g[_cells(3.25):_cells(4.75), _cells(1.2):_cells(1.5)] = 100
+    cm.set_static_map(GridMap(g, RES))
+    res = gp.plan(cm, pose[:2], GOAL)
+    assert fap.refine(cm, pose, GOAL, res) is res
+    assert (fap.stats.runs, fap.stats.reuses) == (2, 1)
+    # another goal is never served from the kept path
+    fap.refine(_world(slot=True), START, GOAL, gp.plan(_world(slot=True), START[:2], GOAL))
+    assert fap.stats.runs == 3
+    fap.refine(cm, START, (4.2, 6.5), gp.plan(cm, START[:2], (4.2, 6.5)))
+    assert (fap.stats.runs, fap.stats.reuses) == (4, 1)
