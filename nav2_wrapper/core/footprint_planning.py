@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import statistics
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -32,7 +33,7 @@ from .costmap import Costmap
 from .footprint import Footprint
 from .headings import HeadingConfig, headings_over, resample
 from .planner import GlobalPlanner, PlanResult
-from .se2_planner import Se2Plan, Se2Planner
+from .se2_planner import Se2Plan, Se2Planner, Se2Search
 
 
 @dataclass
@@ -42,12 +43,14 @@ class FallbackStats:
     runs: int = 0
     found: int = 0
     reuses: int = 0
+    slice_max_s: float = 0.0       # the longest single call into the search (set-up + one slice): the stall
     seconds: list[float] = field(default_factory=list)
     last: Se2Plan | None = None
 
     def summary(self) -> dict[str, float]:
         s = self.seconds
         return {"se2_runs": self.runs, "se2_found": self.found, "se2_reuses": self.reuses,
+                "se2_slice_max_s": self.slice_max_s,
                 "se2_median_s": statistics.median(s) if s else 0.0, "se2_max_s": max(s) if s else 0.0}
 
 
@@ -62,10 +65,13 @@ class FootprintAwarePlanner:
         self.headings_cfg = HeadingConfig(bins=planner.cfg.se2.bins, spacing=0.05)
         self.stats = FallbackStats()
         self._kept: _KeptPath | None = None
+        self._pending: tuple[Se2Search, PlanResult, tuple[float, float]] | None = None
 
-    def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult) -> PlanResult:
+    def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult,
+               budget: int | None = None) -> PlanResult | None:
         """``res`` itself when the footprint fits along it at some heading everywhere (or the fallback is off),
-        else the SE(2) path with its headings, else ``res`` again (see the module docstring)."""
+        else the kept or a new SE(2) path with its headings, else ``res`` again (see the module docstring).
+        With a ``budget`` (expansions), a search that needs more returns None and goes on in ``advance``."""
         cfg = self.planner.cfg
         if not cfg.se2.enabled or not res.ok or len(res.path) < 2:
             return res
@@ -82,8 +88,34 @@ class FootprintAwarePlanner:
             self.stats.reuses += 1
             return replace(res, path=kept[0], headings=kept[1], length=_length(kept[0]))
         self._kept = None
-        plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
-                             self.planner.traversal_table(), cfg.tolerance, guide=res.path)
+        t0 = time.perf_counter()
+        search = self.se2.begin(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
+                                self.planner.traversal_table(), cfg.tolerance, guide=res.path)
+        if isinstance(search, Se2Plan):
+            return self._finish(search, res, goal)
+        self._pending = (search, res, goal)
+        return self.advance(budget, time.perf_counter() - t0)
+
+    @property
+    def pending(self) -> bool:
+        """A search was begun and has not ended yet (``advance`` carries it on)."""
+        return self._pending is not None
+
+    def advance(self, budget: int | None = None, spent: float = 0.0) -> PlanResult | None:
+        """Carry the pending search on by up to ``budget`` expansions (None: to its end); its outcome as in
+        ``refine`` once it ended, None while it goes on. ``spent`` is this tick's set-up time, for the stats."""
+        if self._pending is None:
+            return None
+        search, res, goal = self._pending
+        t0 = time.perf_counter()
+        plan = search.advance(self.se2.cfg.max_expansions if budget is None else budget)
+        self.stats.slice_max_s = max(self.stats.slice_max_s, spent + time.perf_counter() - t0)
+        if plan is None:
+            return None
+        return self._finish(plan, res, goal)
+
+    def _finish(self, plan: Se2Plan, res: PlanResult, goal: tuple[float, float]) -> PlanResult:
+        self._pending = None
         self.stats.runs += 1
         self.stats.seconds.append(plan.seconds)
         self.stats.last = plan
@@ -95,8 +127,9 @@ class FootprintAwarePlanner:
                        expansions=res.expansions + plan.expansions)
 
     def forget(self) -> None:
-        """Drop the kept SE(2) path (a new goal, or the run ended)."""
+        """Drop the kept SE(2) path and any pending search (a new goal, or the run ended)."""
         self._kept = None
+        self._pending = None
 
     def _still_valid(self, costmap: Costmap, pose: Pose2D,
                      goal: tuple[float, float]) -> tuple[np.ndarray, np.ndarray] | None:
