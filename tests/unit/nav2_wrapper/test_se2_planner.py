@@ -243,3 +243,49 @@ def test_a_still_fitting_se2_path_is_reused_at_the_next_replan_and_searched_agai
     assert fap.stats.runs == 3
     fap.refine(cm, START, (4.2, 6.5), gp.plan(cm, START[:2], (4.2, 6.5)))
     assert (fap.stats.runs, fap.stats.reuses) == (4, 1)
+
+
+def test_a_search_run_in_slices_finds_the_same_path_as_in_one_go() -> None:
+    cm = _world(slot=True)
+    guide = _plan_2d(cm)
+    whole = _se2(cm, guide)
+    planner = Se2Planner(Se2PlannerConfig(), FOOTPRINT)
+    search = planner.begin(cm, START, GOAL, GlobalPlanner().traversal_table(), guide=guide)
+    assert not isinstance(search, type(whole))
+    search.hk, search.hv = search.hk[:16], search.hv[:16]     # the heap must grow on the way, too
+    slices, out = 0, None
+    while out is None:
+        out = search.advance(1000)
+        slices += 1
+    assert out.ok
+    assert slices > 2
+    assert out.expansions == whole.expansions
+    assert np.array_equal(out.path, whole.path)
+    assert np.array_equal(out.headings, whole.headings)
+
+
+def test_the_navigator_follows_its_path_while_a_search_runs_in_slices_then_takes_the_se2_path() -> None:
+    cm = _world(slot=True)
+    grid = GridMap(np.where(cm.static == LETHAL, 100, 0).astype(np.int8), RES)
+    cfg = NavConfig.defaults(FOOTPRINT)
+    cfg.mppi = None
+    cfg.planner.se2.tick_expansions = 1000
+    nav = Navigator(cfg)
+    nav.tick(0.0, START, grid=grid)
+    nav.navigate(GOAL[0], GOAL[1], math.pi / 2, now=0.0)
+    nav.tick(0.05, START)                       # the first plan: no path to follow yet, so searched to the end
+    first = nav.path
+    assert nav.footprint_planner.stats.found == 1
+    assert not nav.footprint_planner.pending
+    nav.footprint_planner.forget()               # as if the kept path no longer fitted: the next replan searches
+    t, ticks = 1.1, 0
+    nav.tick(t, START)
+    while nav.footprint_planner.pending:
+        assert nav.path is first                  # followed unchanged meanwhile
+        t, ticks = t + 0.05, ticks + 1
+        nav.tick(t, START)
+    assert ticks >= 2
+    assert nav.footprint_planner.stats.runs == 2
+    assert nav.path is not first
+    assert nav.path[:, 0].min() < 2.0            # the slot route again
+    assert nav.controller.path_headings is not None
