@@ -51,7 +51,7 @@ class Se2PlannerConfig:
                                            "per cell and heading bin)", ge=1000)
     max_expansions: int = param(3_000_000, "the search gives up after expanding this many states", ge=1000)
     tick_expansions: int = param(
-        60_000, "while the robot follows a path, a search runs in slices of this many states per control tick "
+        80_000, "while the robot follows a path, a search runs in slices of this many states per control tick "
                 "(the live loop plans inside its tick: this bounds the stall), following the current path meanwhile",
         ge=1000)
     heuristic_weight: float = param(1.0, "weighted A* on the SE(2) lattice (1: cost-optimal)", ge=1.0)
