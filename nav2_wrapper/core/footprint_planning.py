@@ -14,8 +14,10 @@ next replan sees more of the map.
 The search's result is kept between replans: at the next (1 Hz) replan, when the 2D path still has a point
 without a fitting heading, the rest of the previous SE(2) path — from the pose nearest the robot on, each pose
 at its own heading — is looked up in the current collision grids, and if every pose still fits it is kept
-instead of searching again. A search costs hundreds of milliseconds; the lookup costs what the heading check
-of the 2D path costs. A 2D path that fits is still preferred (it follows map changes for free).
+instead of searching again; if some pose no longer fits at its own heading (the map grew, a noise speckle),
+the heading assignment is run along the kept route, as for a 2D path, and new headings that fit keep it too.
+A search costs up to seconds; the lookup costs what the heading check of the 2D path costs. A 2D path that
+fits is still preferred (it follows map changes for free).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ class FallbackStats:
     runs: int = 0
     found: int = 0
     reuses: int = 0
+    reheaded: int = 0              # of the reuses, those that needed new headings somewhere
     slice_max_s: float = 0.0       # the longest single call into the search (set-up + one slice): the stall
     seconds: list[float] = field(default_factory=list)
     last: Se2Plan | None = None
@@ -50,7 +53,7 @@ class FallbackStats:
     def summary(self) -> dict[str, float]:
         s = self.seconds
         return {"se2_runs": self.runs, "se2_found": self.found, "se2_reuses": self.reuses,
-                "se2_slice_max_s": self.slice_max_s,
+                "se2_reheaded": self.reheaded, "se2_slice_max_s": self.slice_max_s,
                 "se2_median_s": statistics.median(s) if s else 0.0, "se2_max_s": max(s) if s else 0.0}
 
 
@@ -134,7 +137,8 @@ class FootprintAwarePlanner:
     def _still_valid(self, costmap: Costmap, pose: Pose2D,
                      goal: tuple[float, float]) -> tuple[np.ndarray, np.ndarray] | None:
         """The rest of the kept SE(2) path from the robot on (path, headings) if it was planned to this goal,
-        the robot is still near it, and every pose of it fits the current collision grids at its heading."""
+        the robot is still near it, and every pose of it fits the current collision grids at its heading — or
+        at headings the heading assignment finds anew along it."""
         kept, cfg = self._kept, self.planner.cfg.se2
         if kept is None or math.hypot(kept.goal[0] - goal[0], kept.goal[1] - goal[1]) > 1e-6:
             return None
@@ -145,9 +149,17 @@ class FootprintAwarePlanner:
         path, headings = kept.path[i:].copy(), kept.headings[i:]
         path[0] = pose[0], pose[1]
         bins = np.round(np.mod(headings, math.pi) / (math.pi / cfg.bins)).astype(np.int64) % cfg.bins
-        fits = self.se2.feasible_bins(costmap, path)[np.arange(len(path)), bins]
-        fits[np.hypot(path[:, 0] - pose[0], path[:, 1] - pose[1]) <= cfg.escape_radius] = True
-        return (path, headings) if bool(fits.all()) else None
+        ok = self.se2.feasible_bins(costmap, path)
+        ok[np.hypot(path[:, 0] - pose[0], path[:, 1] - pose[1]) <= cfg.escape_radius] = True
+        if bool(ok[np.arange(len(path)), bins].all()):
+            return path, headings
+        # the map moved on (a post seen, a speckle): the route may still fit at other headings, which is the
+        # test a 2D path passes; a search would most likely find this route again
+        plan = headings_over(path, ok, self.headings_cfg)
+        if not plan.feasible:
+            return None
+        self.stats.reheaded += 1
+        return path, plan.headings
 
 
 @dataclass
