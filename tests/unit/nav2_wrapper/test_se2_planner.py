@@ -289,3 +289,21 @@ def test_the_navigator_follows_its_path_while_a_search_runs_in_slices_then_takes
     assert nav.path is not first
     assert nav.path[:, 0].min() < 2.0            # the slot route again
     assert nav.controller.path_headings is not None
+
+
+def test_a_kept_route_that_no_longer_fits_at_its_own_headings_is_kept_with_new_ones_that_fit() -> None:
+    cm = _world(slot=True)
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    first = fap.refine(cm, START, GOAL, gp.plan(cm, START[:2], GOAL))
+    assert fap._kept is not None
+    in_wall = (fap._kept.path[:, 1] > 3.3) & (fap._kept.path[:, 1] < 4.7)
+    fap._kept.headings = fap._kept.headings.copy()
+    fap._kept.headings[in_wall] = 0.0              # crosswise: the 0.70 m slot does not take the body so
+    pose = (float(first.path[6, 0]), float(first.path[6, 1]), float(first.headings[6]))
+    again = fap.refine(cm, pose, GOAL, gp.plan(cm, pose[:2], GOAL))
+    assert (fap.stats.runs, fap.stats.reuses, fap.stats.reheaded) == (1, 1, 1)
+    assert np.allclose(again.path, first.path[6:])
+    wall = (again.path[:, 1] > 3.3) & (again.path[:, 1] < 4.7)
+    assert np.all(np.abs(np.mod(again.headings[wall], math.pi) - math.pi / 2) < math.radians(15))
+    assert _lethal_contacts(cm, again.path, again.headings) == 0
