@@ -111,6 +111,9 @@ def se2_summary(rows: list[dict]) -> dict:
     """Planning time the SE(2) fallback added, over every run of it in every crossing."""
     secs = [s for r in rows for s in r.get("se2_seconds", [])]
     return {"runs": len(secs), "crossings_using_it": sum(r.get("se2_runs", 0) > 0 for r in rows),
+            "reuses": sum(r.get("se2_reuses", 0) for r in rows),
+            "reheaded": sum(r.get("se2_reheaded", 0) for r in rows),
+            "slice_max_s": max((r.get("se2_slice_max_s", 0.0) for r in rows), default=0.0),
             "median_s": statistics.median(secs) if secs else 0.0, "max_s": max(secs) if secs else 0.0}
 
 
@@ -176,7 +179,9 @@ def main() -> None:
               f"{v['time_ratio_median']:.2f}")
     se2 = se2_summary(rows)
     print(f"se2 fallback: {se2['runs']} runs in {se2['crossings_using_it']} crossings, median "
-          f"{se2['median_s'] * 1000:.0f} ms, max {se2['max_s'] * 1000:.0f} ms")
+          f"{se2['median_s'] * 1000:.0f} ms, max {se2['max_s'] * 1000:.0f} ms; kept its path at {se2['reuses']} "
+          f"replans ({se2['reheaded']} with new headings); longest single call (stall) "
+          f"{se2['slice_max_s'] * 1000:.0f} ms")
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"args": vars(a), "rejected_draws": rejected, "summary": summary, "se2": se2,

@@ -87,29 +87,79 @@ def cost_to_go(passable, factor, goals, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape_r2, escape_factor, max_expansions,
-                  g, parent):  # pragma: no cover - compiled
-    """A* over (bin, row, col). Returns (goal state or −1, expansions).
+def _less(hk, hv, i, j):  # pragma: no cover - compiled
+    """Heap order: by key, then by state (what a heap of (key, state) tuples does)."""
+    return hk[i] < hk[j] or (hk[i] == hk[j] and hv[i] < hv[j])
 
-    Moves: the 8 translations within a bin (cost = length × ``factor`` of the entered cell) and a turn to the
-    neighbouring bin (cost ``rot_cost``; the bins wrap at a half turn), both allowed only into states that are
-    not ``blocked``. Within ``escape_r2`` (cells²) of the start, blocked states may be entered at
-    ``escape_factor`` per cell so a body already touching a noise speckle can leave. ``g`` and ``parent`` are
-    filled for every reached state (g = inf otherwise)."""
+
+@njit(cache=True)
+def _swap(hk, hv, i, j):  # pragma: no cover - compiled
+    hk[i], hk[j] = hk[j], hk[i]
+    hv[i], hv[j] = hv[j], hv[i]
+
+
+@njit(cache=True)
+def heap_push(hk, hv, n, key, val):  # pragma: no cover - compiled
+    """Push onto the binary heap held in hk/hv[:n] (the caller made room); returns the new size."""
+    hk[n], hv[n] = key, val
+    i = n
+    while i > 0:
+        p = (i - 1) // 2
+        if not _less(hk, hv, i, p):
+            break
+        _swap(hk, hv, i, p)
+        i = p
+    return n + 1
+
+
+@njit(cache=True)
+def heap_pop(hk, hv, n):  # pragma: no cover - compiled
+    """Remove the least entry of hk/hv[:n]; returns (its state, the new size)."""
+    top = hv[0]
+    n -= 1
+    hk[0], hv[0] = hk[n], hv[n]
+    i = 0
+    while True:
+        a, b, m = 2 * i + 1, 2 * i + 2, i
+        if a < n and _less(hk, hv, a, m):
+            m = a
+        if b < n and _less(hk, hv, b, m):
+            m = b
+        if m == i:
+            break
+        _swap(hk, hv, i, m)
+        i = m
+    return top, n
+
+
+@njit(cache=True)
+def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape_r2, escape_factor, budget,
+                  g, parent, closed, hk, hv, size):  # pragma: no cover - compiled
+    """A* over (bin, row, col), resumable: runs until a goal, an empty queue or ``budget`` expansions, and
+    keeps its whole state in the arrays passed in, so the next call carries on where this one stopped.
+    Returns (goal state, or −1: no route, −2: budget spent, −3: the heap arrays need room; expansions).
+
+    The caller initialises ``g`` = inf, ``parent`` = −1, ``closed`` = False, pushes the start (``size[0]`` is
+    the heap's size). Moves: the 8 translations within a bin (cost = length × ``factor`` of the entered cell)
+    and a turn to the neighbouring bin (cost ``rot_cost``; the bins wrap at a half turn), both allowed only
+    into states that are not ``blocked``. Within ``escape_r2`` (cells²) of the start, blocked states may be
+    entered at ``escape_factor`` per cell so a body already touching a noise speckle can leave."""
     bins, rows, cols = blocked.shape
     plane = rows * cols
-    g[:] = np.inf
-    parent[:] = -1
     sr, sc = (start % plane) // cols, start % cols
-    g[start] = 0.0
     hw = weight * (1.0 + 1e-6)       # a hair above weight: on equal f, the state nearer the goal pops first
-    heap = [(hw * h[sr, sc], np.int64(start))]
-    closed = np.zeros(bins * plane, np.bool_)
     drs = (-1, -1, -1, 0, 0, 1, 1, 1)
     dcs = (-1, 0, 1, -1, 1, -1, 0, 1)
+    n = size[0]
     expansions = 0
-    while len(heap) > 0:
-        _, s = heapq.heappop(heap)
+    while n > 0:
+        if n + 10 > len(hk):
+            size[0] = n
+            return -3, expansions
+        if expansions >= budget:
+            size[0] = n
+            return -2, expansions
+        s, n = heap_pop(hk, hv, n)
         if closed[s]:
             continue
         closed[s] = True
@@ -117,9 +167,8 @@ def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape
         b, rem = s // plane, s % plane
         r, c = rem // cols, rem % cols
         if goal_mask[r, c]:
+            size[0] = n
             return s, expansions
-        if expansions >= max_expansions:
-            return -1, expansions
         gs = g[s]
         for k in range(10):
             if k < 8:
@@ -143,7 +192,8 @@ def lattice_astar(blocked, factor, h, start, goal_mask, rot_cost, weight, escape
             if ng < g[t] and not closed[t]:
                 g[t] = ng
                 parent[t] = s
-                hv = h[nr, nc]
-                if math.isfinite(hv):
-                    heapq.heappush(heap, (ng + hw * hv, np.int64(t)))
+                hv_ = h[nr, nc]
+                if math.isfinite(hv_):
+                    n = heap_push(hk, hv, n, ng + hw * hv_, np.int64(t))
+    size[0] = n
     return -1, expansions

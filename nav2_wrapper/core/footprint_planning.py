@@ -10,11 +10,21 @@ gap the inscribed disc fits but the rectangle does not must be replaced by a dif
 patch on the same one. If the lattice search fails too (e.g. the map is still mostly unknown, or the window is
 too small), the 2D path is kept: the controller's own footprint checks and the recoveries still apply, and the
 next replan sees more of the map.
+
+The search's result is kept between replans: at the next (1 Hz) replan, when the 2D path still has a point
+without a fitting heading, the rest of the previous SE(2) path — from the pose nearest the robot on, each pose
+at its own heading — is looked up in the current collision grids, and if every pose still fits it is kept
+instead of searching again; if some pose no longer fits at its own heading (the map grew, a noise speckle),
+the heading assignment is run along the kept route, as for a 2D path, and new headings that fit keep it too.
+A search costs up to seconds; the lookup costs what the heading check of the 2D path costs. A 2D path that
+fits is still preferred (it follows map changes for free).
 """
 
 from __future__ import annotations
 
+import math
 import statistics
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -25,7 +35,7 @@ from .costmap import Costmap
 from .footprint import Footprint
 from .headings import HeadingConfig, headings_over, resample
 from .planner import GlobalPlanner, PlanResult
-from .se2_planner import Se2Plan, Se2Planner
+from .se2_planner import Se2Plan, Se2Planner, Se2Search
 
 
 @dataclass
@@ -34,12 +44,16 @@ class FallbackStats:
 
     runs: int = 0
     found: int = 0
+    reuses: int = 0
+    reheaded: int = 0              # of the reuses, those that needed new headings somewhere
+    slice_max_s: float = 0.0       # the longest single call into the search (set-up + one slice): the stall
     seconds: list[float] = field(default_factory=list)
     last: Se2Plan | None = None
 
     def summary(self) -> dict[str, float]:
         s = self.seconds
-        return {"se2_runs": self.runs, "se2_found": self.found,
+        return {"se2_runs": self.runs, "se2_found": self.found, "se2_reuses": self.reuses,
+                "se2_reheaded": self.reheaded, "se2_slice_max_s": self.slice_max_s,
                 "se2_median_s": statistics.median(s) if s else 0.0, "se2_max_s": max(s) if s else 0.0}
 
 
@@ -53,10 +67,14 @@ class FootprintAwarePlanner:
         # half the costmap cells' spacing of the usual heading assignment
         self.headings_cfg = HeadingConfig(bins=planner.cfg.se2.bins, spacing=0.05)
         self.stats = FallbackStats()
+        self._kept: _KeptPath | None = None
+        self._pending: tuple[Se2Search, PlanResult, tuple[float, float]] | None = None
 
-    def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult) -> PlanResult:
+    def refine(self, costmap: Costmap, pose: Pose2D, goal: tuple[float, float], res: PlanResult,
+               budget: int | None = None) -> PlanResult | None:
         """``res`` itself when the footprint fits along it at some heading everywhere (or the fallback is off),
-        else the SE(2) path with its headings, else ``res`` again (see the module docstring)."""
+        else the kept or a new SE(2) path with its headings, else ``res`` again (see the module docstring).
+        With a ``budget`` (expansions), a search that needs more returns None and goes on in ``advance``."""
         cfg = self.planner.cfg
         if not cfg.se2.enabled or not res.ok or len(res.path) < 2:
             return res
@@ -66,14 +84,92 @@ class FootprintAwarePlanner:
         # the search would only escape from it, so it is no reason to replace the plan
         ok[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) <= cfg.se2.escape_radius] = True
         if headings_over(pts, ok, self.headings_cfg).feasible:
+            self._kept = None
             return res
-        plan = self.se2.plan(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
-                             self.planner.traversal_table(), cfg.tolerance, guide=res.path)
+        kept = self._still_valid(costmap, pose, goal)
+        if kept is not None:
+            self.stats.reuses += 1
+            return replace(res, path=kept[0], headings=kept[1], length=_length(kept[0]))
+        self._kept = None
+        t0 = time.perf_counter()
+        search = self.se2.begin(costmap, (float(pose[0]), float(pose[1]), float(pose[2])), goal,
+                                self.planner.traversal_table(), cfg.tolerance, guide=res.path)
+        if isinstance(search, Se2Plan):
+            return self._finish(search, res, goal)
+        self._pending = (search, res, goal)
+        return self.advance(budget, time.perf_counter() - t0)
+
+    @property
+    def pending(self) -> bool:
+        """A search was begun and has not ended yet (``advance`` carries it on)."""
+        return self._pending is not None
+
+    def advance(self, budget: int | None = None, spent: float = 0.0) -> PlanResult | None:
+        """Carry the pending search on by up to ``budget`` expansions (None: to its end); its outcome as in
+        ``refine`` once it ended, None while it goes on. ``spent`` is this tick's set-up time, for the stats."""
+        if self._pending is None:
+            return None
+        search, res, goal = self._pending
+        t0 = time.perf_counter()
+        plan = search.advance(self.se2.cfg.max_expansions if budget is None else budget)
+        self.stats.slice_max_s = max(self.stats.slice_max_s, spent + time.perf_counter() - t0)
+        if plan is None:
+            return None
+        return self._finish(plan, res, goal)
+
+    def _finish(self, plan: Se2Plan, res: PlanResult, goal: tuple[float, float]) -> PlanResult:
+        self._pending = None
         self.stats.runs += 1
         self.stats.seconds.append(plan.seconds)
         self.stats.last = plan
         if not plan.ok:
             return res
         self.stats.found += 1
+        self._kept = _KeptPath((float(goal[0]), float(goal[1])), plan.path, np.asarray(plan.headings))
         return replace(res, path=plan.path, headings=np.asarray(plan.headings), length=plan.length,
                        expansions=res.expansions + plan.expansions)
+
+    def forget(self) -> None:
+        """Drop the kept SE(2) path and any pending search (a new goal, or the run ended)."""
+        self._kept = None
+        self._pending = None
+
+    def _still_valid(self, costmap: Costmap, pose: Pose2D,
+                     goal: tuple[float, float]) -> tuple[np.ndarray, np.ndarray] | None:
+        """The rest of the kept SE(2) path from the robot on (path, headings) if it was planned to this goal,
+        the robot is still near it, and every pose of it fits the current collision grids at its heading — or
+        at headings the heading assignment finds anew along it."""
+        kept, cfg = self._kept, self.planner.cfg.se2
+        if kept is None or math.hypot(kept.goal[0] - goal[0], kept.goal[1] - goal[1]) > 1e-6:
+            return None
+        d = np.hypot(kept.path[:, 0] - pose[0], kept.path[:, 1] - pose[1])
+        i = int(np.argmin(d))
+        if d[i] > cfg.reuse_deviation or len(kept.path) - i < 2:
+            return None
+        path, headings = kept.path[i:].copy(), kept.headings[i:]
+        path[0] = pose[0], pose[1]
+        bins = np.round(np.mod(headings, math.pi) / (math.pi / cfg.bins)).astype(np.int64) % cfg.bins
+        ok = self.se2.feasible_bins(costmap, path)
+        ok[np.hypot(path[:, 0] - pose[0], path[:, 1] - pose[1]) <= cfg.escape_radius] = True
+        if bool(ok[np.arange(len(path)), bins].all()):
+            return path, headings
+        # the map moved on (a post seen, a speckle): the route may still fit at other headings, which is the
+        # test a 2D path passes; a search would most likely find this route again
+        plan = headings_over(path, ok, self.headings_cfg)
+        if not plan.feasible:
+            return None
+        self.stats.reheaded += 1
+        return path, plan.headings
+
+
+@dataclass
+class _KeptPath:
+    """The last SE(2) path found, with the goal it leads to."""
+
+    goal: tuple[float, float]
+    path: np.ndarray
+    headings: np.ndarray
+
+
+def _length(path: np.ndarray) -> float:
+    return float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0

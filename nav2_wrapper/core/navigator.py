@@ -279,8 +279,10 @@ class Navigator:
             return self._zero(rec)
         due = now - self._last_plan >= 1.0 / nc.replan_frequency
         urgent = (self._force_replan or self._path_blocked(pose)) and now - self._last_plan >= nc.min_replan_interval
-        if due or urgent:
-            res = self._plan(pose, now)
+        if self.footprint_planner.pending:
+            self._carry_on()
+        elif due or urgent:
+            res = self._plan(pose, now, self.cfg.planner.se2.tick_expansions if len(self.path) else None)
             if not res.ok:
                 return self._recover(rec, now, pose, res.reason)
         prog = self.progress.assess(now, pose, command=self._last_cmd_speed, remaining=self._last_remaining,
@@ -333,17 +335,32 @@ class Navigator:
         data = np.pad(grid.data, ((bottom, top), (left, right)), constant_values=-1)
         return GridMap(data, res, x0 - left * res, y0 - bottom * res, 0.0, grid.frame_id)
 
-    def _plan(self, pose: Pose2D, now: float) -> PlanResult:
+    def _plan(self, pose: Pose2D, now: float, budget: int | None = None) -> PlanResult:
+        """Plan from the pose (the 2D plan, refined for the footprint). With a ``budget``, an SE(2) search that
+        needs more than that many expansions goes on at the next ticks (``_carry_on``) and the current path is
+        kept meanwhile: the result is then that path."""
         goal = self.active.goal if self.active else pose
-        res = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
-        if res.ok:
-            res = self.footprint_planner.refine(self.global_costmap, pose, (goal[0], goal[1]), res)
+        res: PlanResult | None = self.planner.plan(self.global_costmap, (pose[0], pose[1]), (goal[0], goal[1]))
+        if res is not None and res.ok:
+            res = self.footprint_planner.refine(self.global_costmap, pose, (goal[0], goal[1]), res, budget)
         self._last_plan = now
         self._force_replan = False
+        if res is None:
+            return PlanResult(True, self.path, length=float(np.sum(np.hypot(*np.diff(self.path, axis=0).T))))
         if res.ok:
-            self.path = res.path
-            self.controller.set_path(res.path, res.headings)
+            self._adopt(res)
         return res
+
+    def _carry_on(self) -> None:
+        """One more slice of a pending SE(2) search; its path is taken when it ends (a failed search leaves
+        the 2D path it was begun for)."""
+        res = self.footprint_planner.advance(self.cfg.planner.se2.tick_expansions)
+        if res is not None and res.ok:
+            self._adopt(res)
+
+    def _adopt(self, res: PlanResult) -> None:
+        self.path = res.path
+        self.controller.set_path(res.path, res.headings)
 
     def _path_blocked(self, pose: Pose2D) -> bool:
         """New lethal/inscribed cells on the next stretch of the path (outside the start-escape zone)."""
@@ -386,6 +403,7 @@ class Navigator:
         return Command(0.0, 0.0, 0.0, rec.state, rec.detail, rec.run_id)
 
     def _reset_run(self) -> None:
+        self.footprint_planner.forget()
         self.recovery.reset()
         self.goal_checker.reset()
         self.progress.reset()

@@ -50,7 +50,14 @@ class Se2PlannerConfig:
     max_window_cells: int = param(250_000, "the window is not grown beyond this many cells (memory: ~10 bytes "
                                            "per cell and heading bin)", ge=1000)
     max_expansions: int = param(3_000_000, "the search gives up after expanding this many states", ge=1000)
+    tick_expansions: int = param(
+        80_000, "while the robot follows a path, a search runs in slices of this many states per control tick "
+                "(the live loop plans inside its tick: this bounds the stall), following the current path meanwhile",
+        ge=1000)
     heuristic_weight: float = param(1.0, "weighted A* on the SE(2) lattice (1: cost-optimal)", ge=1.0)
+    reuse_deviation: float = param(0.5, "the previous SE(2) path is kept at a replan only while the robot is "
+                                        "within this distance of it (and every pose of its rest still fits)",
+                                   unit="m", ge=0)
     escape_radius: float = param(0.15, "how far from the start blocked states may be crossed (a body touching "
                                        "a noise speckle must be able to leave)", unit="m", ge=0)
 
@@ -207,11 +214,22 @@ class Se2Planner:
              guide: NDArray[np.float64] | None = None) -> Se2Plan:
         """A path from the start pose to the goal point; ``table`` is the 2D planner's traversal factor per cost
         value (its blocked entries are only charged here: where the body may go is the collision grids' say),
-        ``guide`` the 2D path whose neighbourhood is searched too."""
+        ``guide`` the 2D path whose neighbourhood is searched too. Runs to the end (``max_expansions``)."""
+        search = self.begin(costmap, start, goal, table, tolerance, guide)
+        if isinstance(search, Se2Plan):
+            return search
+        out = search.advance(self.cfg.max_expansions)
+        assert out is not None      # the whole budget was given
+        return out
+
+    def begin(self, costmap: Costmap, start: tuple[float, float, float], goal: tuple[float, float],
+              table: NDArray[np.float64], tolerance: float = 0.0,
+              guide: NDArray[np.float64] | None = None) -> Se2Search | Se2Plan:
+        """The search set up (window, collision grids, heuristic) but not run — ``advance`` runs it in slices —
+        or the failed plan when no search is needed to know there is no route."""
         t0 = time.perf_counter()
         cfg, res = self.cfg, costmap.resolution
         self._res = res
-        esc = cfg.escape_radius / res
         pts = np.array([start[:2], goal[:2]], dtype=float)
         if guide is not None and len(guide):
             pts = np.vstack([pts, guide])
@@ -240,22 +258,11 @@ class Se2Planner:
             margin = 2 * margin + res
         goal_mask = np.zeros(win.shape, np.bool_)
         goal_mask.flat[goals] = True
-        n_states = blocked.size
-        g, parent = np.empty(n_states, np.float32), np.empty(n_states, np.int32)
         sbin = int(round((start[2] % math.pi) / (math.pi / cfg.bins))) % cfg.bins
-        s_state = (sbin * win.shape[0] + sr) * win.shape[1] + sc
-        rot = cfg.rotation_cost * (math.pi / cfg.bins) / res     # metres → cells
-        found, expansions = _se2_search.lattice_astar(
-            blocked, factor, h, s_state, goal_mask, rot, cfg.heuristic_weight, esc * esc, 4.0,
-            cfg.max_expansions, g, parent)
-        if found < 0:
-            why = ("gave up after max_expansions states" if expansions >= cfg.max_expansions
-                   else "no route the footprint fits through at any heading")
-            return Se2Plan(False, reason=why, expansions=expansions, seconds=time.perf_counter() - t0)
-        path, headings = self._extract(costmap, win, parent, found, start, goal, goal_mask[gr, gc] if
-                                       0 <= gr < win.shape[0] and 0 <= gc < win.shape[1] else False)
-        length = float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0
-        return Se2Plan(True, path, headings, "", length, expansions, time.perf_counter() - t0)
+        exact = bool(goal_mask[gr, gc]) if 0 <= gr < win.shape[0] and 0 <= gc < win.shape[1] else False
+        grid = _GridFrame(costmap.origin_x, costmap.origin_y, res)
+        return Se2Search(self, grid, win, blocked, factor, h, goal_mask, (sbin * win.shape[0] + sr) * win.shape[1]
+                         + sc, start, goal, exact, time.perf_counter() - t0)
 
     def _factor(self, costmap: Costmap, win: _Window, table: NDArray[np.float64]) -> NDArray[np.float32]:
         """Traversal factor per window cell: the 2D table's, with the inscribed band charged like the costliest
@@ -281,7 +288,7 @@ class Se2Planner:
         order = np.argsort(d2[ok], kind="stable")
         return (rr[ok] * cols + cc[ok])[order].astype(np.int64)
 
-    def _extract(self, costmap: Costmap, win: _Window, parent: NDArray[np.int64], found: int,
+    def _extract(self, costmap: _GridFrame, win: _Window, parent: NDArray[np.int64], found: int,
                  start: tuple[float, float, float], goal: tuple[float, float],
                  exact_goal: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """World points and headings from the start to the found state; a turn in place keeps one point
@@ -295,7 +302,7 @@ class Se2Planner:
         rows, cols = win.shape
         b, rem = st // (rows * cols), st % (rows * cols)
         r, c = rem // cols + win.r0, rem % cols + win.c0
-        x, y = costmap.cell_to_world(c, r)
+        x, y = costmap.origin_x + (c + 0.5) * costmap.resolution, costmap.origin_y + (r + 0.5) * costmap.resolution
         yaw = b * math.pi / self.cfg.bins
         last = np.ones(len(st), bool)
         last[:-1] = (r[1:] != r[:-1]) | (c[1:] != c[:-1])    # the last state of each run at one cell
@@ -306,6 +313,72 @@ class Se2Planner:
         if exact_goal:
             pts[-1] = goal[:2]
         return _densify(pts, yaw[first], yaw[last], costmap.resolution)
+
+
+@dataclass(frozen=True)
+class _GridFrame:
+    """Where the costmap's cells were when a search began (the map may grow or move while it runs)."""
+
+    origin_x: float
+    origin_y: float
+    resolution: float
+
+
+class Se2Search:
+    """One lattice search, run in slices of expansions (``advance``), so a control loop that plans inside its
+    tick can give it a bounded share of each tick. It searches the grids as they were when it began; the
+    navigator checks the result against the current ones at the next replan, like any kept path."""
+
+    def __init__(self, planner: Se2Planner, frame: _GridFrame, win: _Window, blocked: NDArray[np.bool_],
+                 factor: NDArray[np.float32], h: NDArray[np.float64], goal_mask: NDArray[np.bool_], s_state: int,
+                 start: tuple[float, float, float], goal: tuple[float, float], exact_goal: bool,
+                 seconds: float) -> None:
+        self.planner, self.frame, self.win = planner, frame, win
+        self.blocked, self.factor, self.h, self.goal_mask = blocked, factor, h, goal_mask
+        self.start, self.goal, self.exact_goal, self.s_state = start, goal, exact_goal, s_state
+        self.seconds, self.expansions = seconds, 0
+        n = blocked.size
+        self.g, self.parent = np.full(n, np.inf, np.float32), np.full(n, -1, np.int32)
+        self.closed = np.zeros(n, np.bool_)
+        self.hk, self.hv = np.empty(1 << 16), np.empty(1 << 16, np.int64)
+        self.size = np.zeros(1, np.int64)
+        self.g[s_state] = 0.0
+        sr, sc = (s_state % (win.shape[0] * win.shape[1])) // win.shape[1], s_state % win.shape[1]
+        self.size[0] = _se2_search.heap_push(self.hk, self.hv, 0, planner.cfg.heuristic_weight * h[sr, sc],
+                                             np.int64(s_state))
+
+    def advance(self, budget: int) -> Se2Plan | None:
+        """Expand up to ``budget`` more states (never past ``max_expansions`` in all); the plan once the search
+        ended, None while it goes on."""
+        t0 = time.perf_counter()
+        cfg = self.planner.cfg
+        budget = min(budget, cfg.max_expansions - self.expansions)
+        res = self.frame.resolution
+        rot = cfg.rotation_cost * (math.pi / cfg.bins) / res     # metres → cells
+        esc = cfg.escape_radius / res
+        found = -3
+        while found == -3 and budget > 0:
+            found, n = _se2_search.lattice_astar(
+                self.blocked, self.factor, self.h, self.s_state, self.goal_mask, rot, cfg.heuristic_weight,
+                esc * esc, 4.0, budget, self.g, self.parent, self.closed, self.hk, self.hv, self.size)
+            self.expansions += n
+            budget -= n
+            if found == -3:
+                self.hk = np.concatenate([self.hk, np.empty_like(self.hk)])
+                self.hv = np.concatenate([self.hv, np.empty_like(self.hv)])
+        self.seconds += time.perf_counter() - t0
+        if found >= 0:
+            path, headings = self.planner._extract(self.frame, self.win, self.parent, found, self.start, self.goal,
+                                                   self.exact_goal)
+            length = float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0
+            return Se2Plan(True, path, headings, "", length, self.expansions, self.seconds)
+        if found == -1:
+            return Se2Plan(False, reason="no route the footprint fits through at any heading",
+                           expansions=self.expansions, seconds=self.seconds)
+        if self.expansions >= cfg.max_expansions:
+            return Se2Plan(False, reason="gave up after max_expansions states", expansions=self.expansions,
+                           seconds=self.seconds)
+        return None
 
 
 def _densify(pts: NDArray[np.float64], arrive: NDArray[np.float64], leave: NDArray[np.float64],

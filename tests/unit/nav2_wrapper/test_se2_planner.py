@@ -215,3 +215,95 @@ def test_the_distance_shortcut_leaves_the_collision_grids_unchanged(posts: int,
         (lethal.shape[0] - 2 * pad, lethal.shape[1] - 2 * pad), 2, np.uint8))
     assert np.array_equal(fast, planner.blocked_grids(cm, win))
     assert fast.any() == (posts > 0)
+
+
+def test_a_still_fitting_se2_path_is_reused_at_the_next_replan_and_searched_again_once_blocked() -> None:
+    cm = _world(slot=True)
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    first = fap.refine(cm, START, GOAL, gp.plan(cm, START[:2], GOAL))
+    assert fap.stats.runs == 1
+    assert first.headings is not None
+    k = 6                                  # near the start: the 2D plan from here still takes the dogleg
+    pose = (float(first.path[k, 0]), float(first.path[k, 1]), float(first.headings[k]))
+    again = fap.refine(cm, pose, GOAL, gp.plan(cm, pose[:2], GOAL))
+    assert (fap.stats.runs, fap.stats.reuses) == (1, 1)
+    assert np.allclose(again.path, first.path[k:])
+    assert np.allclose(again.headings, first.headings[k:])
+    assert again.length < first.length
+    # the slot closes: the kept path no longer fits, so the search runs again (and finds no route)
+    g = np.where(cm.static == LETHAL, 100, 0).astype(np.int8)
+    g[_cells(3.25):_cells(4.75), _cells(1.2):_cells(1.5)] = 100
+    cm.set_static_map(GridMap(g, RES))
+    res = gp.plan(cm, pose[:2], GOAL)
+    assert fap.refine(cm, pose, GOAL, res) is res
+    assert (fap.stats.runs, fap.stats.reuses) == (2, 1)
+    # another goal is never served from the kept path
+    fap.refine(_world(slot=True), START, GOAL, gp.plan(_world(slot=True), START[:2], GOAL))
+    assert fap.stats.runs == 3
+    fap.refine(cm, START, (4.2, 6.5), gp.plan(cm, START[:2], (4.2, 6.5)))
+    assert (fap.stats.runs, fap.stats.reuses) == (4, 1)
+
+
+def test_a_search_run_in_slices_finds_the_same_path_as_in_one_go() -> None:
+    cm = _world(slot=True)
+    guide = _plan_2d(cm)
+    whole = _se2(cm, guide)
+    planner = Se2Planner(Se2PlannerConfig(), FOOTPRINT)
+    search = planner.begin(cm, START, GOAL, GlobalPlanner().traversal_table(), guide=guide)
+    assert not isinstance(search, type(whole))
+    search.hk, search.hv = search.hk[:16], search.hv[:16]     # the heap must grow on the way, too
+    slices, out = 0, None
+    while out is None:
+        out = search.advance(1000)
+        slices += 1
+    assert out.ok
+    assert slices > 2
+    assert out.expansions == whole.expansions
+    assert np.array_equal(out.path, whole.path)
+    assert np.array_equal(out.headings, whole.headings)
+
+
+def test_the_navigator_follows_its_path_while_a_search_runs_in_slices_then_takes_the_se2_path() -> None:
+    cm = _world(slot=True)
+    grid = GridMap(np.where(cm.static == LETHAL, 100, 0).astype(np.int8), RES)
+    cfg = NavConfig.defaults(FOOTPRINT)
+    cfg.mppi = None
+    cfg.planner.se2.tick_expansions = 1000
+    nav = Navigator(cfg)
+    nav.tick(0.0, START, grid=grid)
+    nav.navigate(GOAL[0], GOAL[1], math.pi / 2, now=0.0)
+    nav.tick(0.05, START)                       # the first plan: no path to follow yet, so searched to the end
+    first = nav.path
+    assert nav.footprint_planner.stats.found == 1
+    assert not nav.footprint_planner.pending
+    nav.footprint_planner.forget()               # as if the kept path no longer fitted: the next replan searches
+    t, ticks = 1.1, 0
+    nav.tick(t, START)
+    while nav.footprint_planner.pending:
+        assert nav.path is first                  # followed unchanged meanwhile
+        t, ticks = t + 0.05, ticks + 1
+        nav.tick(t, START)
+    assert ticks >= 2
+    assert nav.footprint_planner.stats.runs == 2
+    assert nav.path is not first
+    assert nav.path[:, 0].min() < 2.0            # the slot route again
+    assert nav.controller.path_headings is not None
+
+
+def test_a_kept_route_that_no_longer_fits_at_its_own_headings_is_kept_with_new_ones_that_fit() -> None:
+    cm = _world(slot=True)
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    first = fap.refine(cm, START, GOAL, gp.plan(cm, START[:2], GOAL))
+    assert fap._kept is not None
+    in_wall = (fap._kept.path[:, 1] > 3.3) & (fap._kept.path[:, 1] < 4.7)
+    fap._kept.headings = fap._kept.headings.copy()
+    fap._kept.headings[in_wall] = 0.0              # crosswise: the 0.70 m slot does not take the body so
+    pose = (float(first.path[6, 0]), float(first.path[6, 1]), float(first.headings[6]))
+    again = fap.refine(cm, pose, GOAL, gp.plan(cm, pose[:2], GOAL))
+    assert (fap.stats.runs, fap.stats.reuses, fap.stats.reheaded) == (1, 1, 1)
+    assert np.allclose(again.path, first.path[6:])
+    wall = (again.path[:, 1] > 3.3) & (again.path[:, 1] < 4.7)
+    assert np.all(np.abs(np.mod(again.headings[wall], math.pi) - math.pi / 2) < math.radians(15))
+    assert _lethal_contacts(cm, again.path, again.headings) == 0
