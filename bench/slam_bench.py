@@ -36,7 +36,7 @@ def worlds() -> list[tuple[World, dict]]:
 def _work_marks(eng: SlamEngine) -> tuple[int, int, int, int, int]:
     """Counters whose change over one ``process`` call says what the call did."""
     s = eng.stats
-    return (s.loop_closures + s.loop_rejected, s.loop_closures, s.optimizations, len(eng.rerender_times),
+    return (s.loop_closures + s.loop_rejected, s.loop_closures, s.optimizations, eng.rerender_batches,
             s.map_nodes_rerendered)
 
 

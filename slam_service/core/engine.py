@@ -12,6 +12,7 @@ import dataclasses
 import logging
 import math
 import time
+from collections import deque
 from typing import Literal
 
 import numpy as np
@@ -41,6 +42,7 @@ from .session import SessionData
 from .types import SlamConfig, SlamStats, Update, as_pose
 
 log = logging.getLogger(__name__)
+TIMING_SAMPLES = 10_000  # latest optimisation / re-render durations kept (benches read them; bounded for all-day runs)
 PRUNE_PER_CALL = 4  # nodes lifelong pruning examines per new node (bounds the call; it falls behind rarely)
 Mode = Literal["mapping", "localization"]
 
@@ -52,8 +54,10 @@ class SlamEngine:
             raise ValueError(f"mode must be 'mapping' or 'localization', got {mode!r}")
         self._mode: Mode = mode
         self.last_optimize: OptimizeResult | None = None
-        self.optimize_times: list[float] = []  # seconds per loop-closure optimisation (graph only)
-        self.rerender_times: list[float] = []  # seconds per re-render batch (one call's node budget, or a flush)
+        # Timing samples for benches and status, bounded so an all-day run does not grow them with distance
+        self.optimize_times: deque[float] = deque(maxlen=TIMING_SAMPLES)  # s per loop-closure optimisation
+        self.rerender_times: deque[float] = deque(maxlen=TIMING_SAMPLES)  # s per re-render batch (budget or flush)
+        self.rerender_batches = 0  # re-render batches so far (the deque above keeps only the latest)
         self._fixed_map: GridMap | None = None
         self._fixed_lookup: LookupGrid | None = None
         self.reset()
@@ -740,6 +744,7 @@ class SlamEngine:
             k = self._pending.pop()  # the list is stored largest shift last
             self._render_node(k, self.graph.poses[k])
         self.rerender_times.append(time.perf_counter() - t0)
+        self.rerender_batches += 1
         self.stats.map_nodes_rerendered += n
         self.stats.map_nodes_pending = len(self._pending)
         return n

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from robonix_common.grid import GridMap
 from slam_service.core import ate_rmse, occupied_iou
+from slam_service.core.engine import TIMING_SAMPLES
 
 from .conftest import MappingRun
 
@@ -47,4 +48,7 @@ def test_engine_counters_and_map_export(mapping_with_lc: MappingRun) -> None:
     assert m.origin_x + m.width * m.resolution >= 10.0
     assert m.origin_y + m.height * m.resolution >= 8.0
     assert eng.optimize_times
+    # timing samples are bounded (an all-day run must not grow them); the batch counter keeps counting
+    assert eng.optimize_times.maxlen == eng.rerender_times.maxlen == TIMING_SAMPLES
+    assert eng.rerender_batches >= len(eng.rerender_times) > 0
     assert eng.last_optimize is not None
