@@ -89,6 +89,12 @@ class MppiController(HolonomicController):
         remaining = self.remaining(pose)
         target = self._heading_target(i, pose, goal, costmap)
         cmd = self._optimise(pose, vel, goal, costmap, i, target)
+        # vx and vy are sampled within their own limits, so together they could reach √2 × either: hold the
+        # planar speed to the cruise speed the profile (and the pursuit) drive at
+        vmax = self.cfg.desired_linear_vel * self.speed_limit
+        v = math.hypot(cmd[0], cmd[1])
+        if v > vmax:
+            cmd = (cmd[0] * vmax / v, cmd[1] * vmax / v, *cmd[2:])
         cand = np.array([cmd])
         if not self.trajectory_hits(cand, pose, costmap)[0]:
             return ControlOutput(*cmd, False, remaining, "mppi")
