@@ -288,14 +288,16 @@ class SlamLoop:
                     return
                 self._warn("publisher", f"publisher iteration failed: {exc}")
 
-    def _maybe_publish_map(self, now: float) -> None:
+    def _maybe_publish_map(self, now: float, force: bool = False) -> None:
         if not self._map_dirty:
             return
         wall = time.monotonic()
-        if now - self._map_clock < self._map_period and wall - self._map_wall < self._map_period \
+        if not force and now - self._map_clock < self._map_period and wall - self._map_wall < self._map_period \
                 and now >= self._map_clock:
             return
         with self.lock:
+            if not self._map_dirty:  # the other thread published it meanwhile
+                return
             grid = self.engine.map()
             self._map_dirty = False
         self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
@@ -344,6 +346,11 @@ class SlamLoop:
             self.integrating = on
         if not on:
             self.counters["scans_paused"] += self._queue.clear()
+            # the changes made before the pause go out now, so nothing is published while paused
+            try:
+                self._maybe_publish_map(self.clock.now(), force=True)
+            except Exception as exc:  # DDS closing at shutdown: the pause itself must still happen
+                self._warn("publisher", f"map publish at pause failed: {exc}")
 
     def replace_engine(self, engine: SlamEngine, map_id: str = "") -> None:
         """Swap in a freshly loaded engine (load_map): the map is republished at once."""
