@@ -6,6 +6,10 @@
 ``--only`` drives just the worlds of the listed generator seeds (the number in a world's name, ``clutter_41``),
 e.g. to rerun the failures of a full run without generating and proving all the worlds before them.
 
+The full suite is ~1200 crossings (hours of CPU), so every finished crossing is appended at once to
+``<out>.rows.jsonl``; ``--resume`` reuses the crossings already there (same world, seed, noise and the same
+settings) and runs only the rest, so an interrupted run loses at most the crossings in flight.
+
 Worlds come from :mod:`robonix_eval.clutter` (cellular automaton on a 0.15 m grid, fill drawn uniformly
 from 10–35 %, two smoothing passes; walls on three sides; start 1 m above the south wall, goal 10 m above
 the start). A world is used only when the configuration-space proof shows that the 0.70 × 0.50 m
@@ -96,6 +100,23 @@ def run_one(job: tuple[dict, int, float, float, bool, str, float, bool]) -> dict
             "se2_seconds": pipe.nav.footprint_planner.stats.seconds}
 
 
+def _key(world: str, seed: int, noisy: bool) -> str:
+    return f"{world}/{seed}/{'noise' if noisy else 'clean'}"
+
+
+def load_done(rows_path: Path, settings: dict, resume: bool) -> dict[str, dict]:
+    """The crossings a previous run of the same settings finished (``--resume``); else start the file anew."""
+    if resume and rows_path.exists():
+        lines = [json.loads(line) for line in rows_path.read_text().splitlines() if line.strip()]
+        if not lines or lines[0].get("settings") != settings:
+            raise SystemExit(f"clutter_suite: {rows_path} was written with other settings "
+                             f"({lines[0].get('settings') if lines else 'empty'}); drop --resume or pick another --out")
+        return {_key(r["world"], r["seed"], r["noise"]): r for r in lines[1:]}
+    rows_path.parent.mkdir(parents=True, exist_ok=True)
+    rows_path.write_text(json.dumps({"settings": settings}) + "\n")
+    return {}
+
+
 def _seeds(text: str) -> list[int]:
     """``--only``'s world seeds (empty: all of ``--worlds``)."""
     try:
@@ -151,6 +172,8 @@ def main() -> None:
                     help="the planner's footprint-aware SE(2) fallback (off: the 2D plan only, for comparison)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "clutter_suite.json"))
+    ap.add_argument("--resume", action="store_true",
+                    help="reuse the crossings <out>.rows.jsonl already holds (same settings); run the rest")
     a = ap.parse_args()
     if not (1 <= a.worlds <= 10_000 and 1 <= a.seeds <= 100 and 1 <= a.jobs <= 64 and 0 <= a.margin <= 0.5):
         raise SystemExit("clutter_suite: --worlds 1..10000, --seeds 1..100, --jobs 1..64, --margin 0..0.5")
@@ -160,18 +183,26 @@ def main() -> None:
     print(f"{len(worlds)} passable worlds ({rejected} draws rejected by the proof) in {time.perf_counter() - t0:.0f} s",
           flush=True)
     noises = {"both": (True, False), "on": (True,), "off": (False,)}[a.noise]
+    rows_path = Path(a.out).with_suffix(".rows.jsonl")
+    done = load_done(rows_path, {"controller": a.controller, "margin": a.margin, "timeout": a.timeout,
+                                 "se2": a.se2}, a.resume)
+    wanted = [(w, s, n) for w in worlds for s in range(a.seeds) for n in noises]
+    rows = [done[k] for w, s, n in wanted if (k := _key(f"clutter_{w.seed}", s, n)) in done]
     jobs = [(w.scene(), s, w.shortest, w.fill, n, a.controller, a.timeout, a.se2 == "on")
-            for w in worlds for s in range(a.seeds) for n in noises]
-    rows: list[dict] = []
-    with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool:
+            for w, s, n in wanted if _key(f"clutter_{w.seed}", s, n) not in done]
+    if rows:
+        print(f"resumed: {len(rows)} crossings from {rows_path}, {len(jobs)} to run", flush=True)
+    with ProcessPoolExecutor(a.jobs, mp_context=get_context("spawn")) as pool, rows_path.open("a") as log:
         for row in pool.map(run_one, jobs):
             rows.append(row)
+            log.write(json.dumps(row) + "\n")
+            log.flush()
             if not row["success"]:
                 print(f"  {row['world']} seed {row['seed']} noise {row['noise']}: {row['state']}, "
                       f"{row['collisions']} contacts: {row['detail'][:80]}", flush=True)
             if len(rows) % 20 == 0:
                 ok = sum(r["success"] for r in rows)
-                print(f"{len(rows)}/{len(jobs)} runs, {ok} succeeded", flush=True)
+                print(f"{len(rows)}/{len(wanted)} runs, {ok} succeeded", flush=True)
     summary = summarise(rows)
     for k, v in summary.items():
         print(f"{k:<16} {v['succeeded']:>4}/{v['runs']:<4} success {v['success_rate']:.3f}  contacts "
