@@ -67,7 +67,7 @@ def run(laps: int, speed: float, prune: bool, seed: int) -> dict[str, Any]:
     lat: list[float] = []
     t0 = time.perf_counter()
 
-    def feed(scan: Scan, odom: tuple[float, float, float], gt: tuple[float, float, float]) -> None:
+    def feed(scan: Scan, odom: tuple[float, float, float], gt: tuple[float, float, float], _wz: float) -> None:
         if not tracemalloc.is_tracing():  # the heap figure is SLAM's, not the sim's set-up
             tracemalloc.start()
         gt_at[round(scan.stamp, 6)] = gt

@@ -24,7 +24,6 @@ occupied-cell IoU of the map against the scene's ground-truth raster (observed w
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -32,13 +31,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hal_panda_mobile.files import load_robot_description, load_scene
-from hal_panda_mobile.sim import LidarNoise, OdomNoise, PandaMobileSim
+from hal_panda_mobile.sim import LidarNoise, OdomNoise
 from robonix_common.geometry import compose, inverse
 from robonix_common.grid import GridMap
 from slam_service.core import Scan, SlamConfig, SlamEngine, ate_rmse, occupied_iou
 
-from .slam_loop import ScriptedDriver, Waypoint
+from .slam_loop import LoopSetting, Waypoint, drive_loop
 
 # Apartment tour (start (2.5, 4.0) facing +x): out east, a half-turn in place at (3.8, 4.0) (pi rad at the
 # driver's 1 rad/s limit: ~3.5 s, long enough for a 3 s gap inside it), then the bedroom lap and back.
@@ -110,37 +108,22 @@ def record(route: Sequence[Waypoint] = TOUR, *, scene: str = "apartment", seed: 
            leg_timeout: float = 40.0, lidar: dict[str, float] | None = None) -> Recording:
     """Drive ``route`` in the sim (realistic odometry drift, 1 cm lidar noise) and record every scan;
     ``lidar`` overrides fields of the robot's LidarSpec (beams, fov, range_max)."""
-    robot = load_robot_description()
-    if lidar:
-        robot = dataclasses.replace(robot, lidar=dataclasses.replace(robot.lidar, **lidar))
-    sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=OdomNoise.realistic(),
-                         lidar_noise=LidarNoise(noise_std=0.01))
-    mx, my, _, myaw = robot.lidar.mount
-    x0, y0, *_ = sim.ground_truth()
-    driver = ScriptedDriver((x0, y0), list(route), speed=0.4)
-    ctrl_every = max(1, round(0.05 / sim.timestep))
-    scan_every = max(1, round(0.1 / sim.timestep))
+    setting = LoopSetting("faults", OdomNoise.realistic(), LidarNoise(noise_std=0.01),
+                          slam_config=SlamConfig(resolution=resolution))
     frames: list[Frame] = []
-    meta = None
-    step, leg, leg_t0 = 0, 0, 0.0
-    while not driver.done:
-        sim.step(ctrl_every)
-        step += ctrl_every
-        x, y, yaw, _, _, wz = sim.ground_truth()
-        if step % scan_every == 0:
-            s, o = sim.scan(), sim.odometry()
-            meta = meta or (s.angle_min, s.angle_increment, s.range_min, s.range_max)
-            frames.append(Frame(float(s.stamp), np.asarray(s.ranges, dtype=np.float32).copy(),
-                                np.array([o.x, o.y, o.yaw]), np.array([x, y, yaw]), float(wz)))
-        if driver.i != leg:
-            leg, leg_t0 = driver.i, sim.time
-        elif sim.time - leg_t0 > leg_timeout:
-            break
-        sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
-    sim.stop()
-    truth = sim.ground_truth_grid(resolution, min_height=robot.lidar.mount[2])
-    assert meta is not None
-    return Recording(frames, *meta, (mx, my, myaw), truth, driver.done)
+    first: list[Scan] = []
+
+    def keep(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float], wz: float) -> None:
+        first[:] = first or [scan]
+        frames.append(Frame(float(scan.stamp), np.asarray(scan.ranges, dtype=np.float32).copy(), np.array(o),
+                            np.array(g), wz))
+
+    drive, truth = drive_loop(scene, setting, seed, list(route), leg_timeout, keep, lidar=lidar)
+    if not first:
+        raise ValueError("the drive ended before the first scan")
+    s = first[0]
+    return Recording(frames, s.angle_min, s.angle_increment, s.range_min, s.range_max, s.mount, truth,
+                     drive.completed)
 
 
 def _scan(rec: Recording, f: Frame, ranges: np.ndarray | None = None, **kw: float) -> Scan:

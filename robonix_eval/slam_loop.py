@@ -9,6 +9,7 @@ lidar, so the route cannot depend on the SLAM result being scored, and one drive
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -194,14 +195,21 @@ class LoopRecording:
     config: SlamConfig  # the SLAM config of the setting
 
 
+OnScan = Callable[[Scan, tuple[float, float, float], tuple[float, float, float], float], None]
+
+
 def drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_timeout: float,
-               on_scan: Callable[[Scan, tuple[float, float, float], tuple[float, float, float]], None],
-               on_waypoint: Callable[[int, float], None] | None = None) -> tuple[DriveResult, GridMap]:
-    """Drive ``wps`` in the sim; ``on_scan(scan, odom, gt)`` at each 10 Hz lidar scan and, if given,
-    ``on_waypoint(reached, driven_m)`` each time a waypoint is reached (so a caller driving a route several
-    times can cut the drive into laps). Returns how the drive went and the ground-truth grid at the
-    config's resolution. The one sim drive loop of the SLAM evaluations and benches."""
+               on_scan: OnScan, on_waypoint: Callable[[int, float], None] | None = None,
+               lidar: dict[str, float] | None = None) -> tuple[DriveResult, GridMap]:
+    """Drive ``wps`` in the sim; ``on_scan(scan, odom, gt, yaw_rate)`` at each 10 Hz lidar scan (the true
+    yaw rate, for fault injection that needs to find a fast turn) and, if given, ``on_waypoint(reached,
+    driven_m)`` each time a waypoint is reached (so a caller driving a route several times can cut the drive
+    into laps). ``lidar`` overrides fields of the robot's LidarSpec (beams, fov, range_max: another
+    scanner). Returns how the drive went and the ground-truth grid at the config's resolution. The one sim
+    drive loop of the SLAM evaluations and benches."""
     robot = load_robot_description()
+    if lidar:
+        robot = dataclasses.replace(robot, lidar=dataclasses.replace(robot.lidar, **lidar))
     sim = PandaMobileSim(robot, load_scene(scene), seed=seed, odom_noise=st.odom_noise, lidar_noise=st.lidar_noise)
     cfg = st.slam_config or SlamConfig()
     mx, my, _, myaw = robot.lidar.mount
@@ -214,7 +222,7 @@ def drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_
     while not driver.done:
         sim.step(ctrl_every)
         step += ctrl_every
-        x, y, yaw, *_ = sim.ground_truth()
+        x, y, yaw, _, _, wz = sim.ground_truth()
         driven += math.hypot(x - last_xy[0], y - last_xy[1])
         last_xy = (x, y)
         if step % scan_every == 0:
@@ -226,7 +234,7 @@ def drive_loop(scene: str, st: LoopSetting, seed: int, wps: list[Waypoint], leg_
                 ranges[ranges > range_max] = np.inf
             scan = Scan(ranges, s.angle_min, s.angle_increment * st.beam_step, s.range_min, range_max, s.stamp,
                         mount, s.frame_id)
-            on_scan(scan, (o.x, o.y, o.yaw), (x, y, yaw))
+            on_scan(scan, (o.x, o.y, o.yaw), (x, y, yaw), float(wz))
         sim.set_cmd_vel(*driver.command(x, y, yaw), stamp=sim.time)
         if driver.i != leg:  # checked right after the command so the last waypoint is reported too
             leg, leg_t0 = driver.i, sim.time
@@ -249,7 +257,7 @@ def record_loop(scene: str = "apartment", *, seed: int = 0, hard: bool = False,
     odom: list[tuple[float, float, float]] = []
     gt: list[tuple[float, float, float]] = []
 
-    def keep(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float]) -> None:
+    def keep(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float], _wz: float) -> None:
         scans.append(scan)
         odom.append(o)
         gt.append(g)
@@ -273,7 +281,7 @@ def run_slam_loops(scene: str = "apartment", *, seed: int = 0, hard: bool = Fals
     odom_at: dict[float, tuple[float, float, float]] = {}
     wps = list(route or LOOPS[scene])
 
-    def feed(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float]) -> None:
+    def feed(scan: Scan, o: tuple[float, float, float], g: tuple[float, float, float], _wz: float) -> None:
         t = round(scan.stamp, 6)
         gt_at[t], odom_at[t] = g, o
         for lc, eng in engines.items():

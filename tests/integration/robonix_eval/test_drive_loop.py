@@ -17,7 +17,7 @@ def test_drive_loop_reports_every_waypoint_with_distance_so_far() -> None:
     reached: list[tuple[int, float]] = []
     stamps: list[float] = []
     drive, _truth = drive_loop("apartment", REALISTIC, 0, ROUTE * 2, 40.0,
-                               lambda scan, _odom, _gt: stamps.append(scan.stamp),
+                               lambda scan, _odom, _gt, _wz: stamps.append(scan.stamp),
                                lambda i, driven: reached.append((i, driven)))
     assert drive.completed, drive
     assert [i for i, _ in reached] == list(range(1, 2 * len(ROUTE) + 1))
