@@ -148,6 +148,8 @@ class SlamLoop:
         self.process_ms_max = 0.0  # slowest SlamEngine.process call so far (wall ms)
         # the latest calls' cost, for percentiles in the status (a soak watches p99 stay flat); bounded
         self._process_ms: collections.deque[float] = collections.deque(maxlen=RECENT_PROCESS_CALLS)
+        # the same calls' CPU time on the worker thread: flat or not whatever else the host runs
+        self._process_cpu_ms: collections.deque[float] = collections.deque(maxlen=RECENT_PROCESS_CALLS)
         self._subs = [
             node.create_subscription(bindings["scan"].topic, LaserScan, self._on_scan, bindings["scan"].qos),
             node.create_subscription(bindings["odom"].topic, Odometry, self._on_odom, bindings["odom"].qos),
@@ -250,7 +252,7 @@ class SlamLoop:
             upd = self.engine.process(scan, odom, t)
             process_s = time.perf_counter() - t0
             cpu_s = time.thread_time() - c0
-            self._note_process_time(1e3 * process_s)
+            self._note_process_time(1e3 * process_s, 1e3 * cpu_s)
             self._m2o = upd.map_to_odom
             self._last_stamp = max(self._last_stamp, t)
             if upd.map_changed:
@@ -258,10 +260,11 @@ class SlamLoop:
         self._send_tf(t)
         return upd, process_s, cpu_s
 
-    def _note_process_time(self, ms: float) -> None:
+    def _note_process_time(self, ms: float, cpu_ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
         self.process_ms_max = max(self.process_ms_max, ms)
         self._process_ms.append(ms)
+        self._process_cpu_ms.append(cpu_ms)
         if ms > 100.0:
             self.counters["process_over_100ms"] += 1
 
@@ -396,8 +399,9 @@ class SlamLoop:
             mode = self.engine.mode
             nodes = self.engine.graph.n_nodes
             recent = np.asarray(self._process_ms, dtype=float)
-        pct = {f"process_ms_p{q}": round(float(np.percentile(recent, q)), 1) if recent.size else None
-               for q in (50, 99)}
+            recent_cpu = np.asarray(self._process_cpu_ms, dtype=float)
+        pct = {f"process{kind}_ms_p{q}": round(float(np.percentile(v, q)), 1) if v.size else None
+               for kind, v in (("", recent), ("_cpu", recent_cpu)) for q in (50, 99)}
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
                 "process_ms_max": round(self.process_ms_max, 1), **pct, "process_ms_window": int(recent.size),
                 "queue_size": self._queue.size, "queue_depth": len(self._queue),

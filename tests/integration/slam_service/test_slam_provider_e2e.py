@@ -160,6 +160,8 @@ def test_map_grows_pauses_and_resumes(env: Env) -> None:
         # at 0 here: on a loaded machine a scan can wait on TF long enough for the queue to overflow
         assert st["scans_dropped_behind"] >= 0, st
         assert 0 < st["process_ms_max"] < 60_000, st
+        # a call's CPU time on the worker thread never exceeds its wall time (1 ms for clock granularity)
+        assert 0 <= st["process_cpu_ms_p99"] <= st["process_ms_max"] + 1.0, st
     finally:
         tf.close()
 
