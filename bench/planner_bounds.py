@@ -158,7 +158,7 @@ def main() -> None:
                 r = planner.plan(cm, pb.world(cm, s), pb.world(cm, g))
                 b = pair_bounds(weights, s, g, args.blocks)
                 assert r.ok, r.reason
-                assert abs(r.cost - b["cost"]) <= 1e-5 * b["cost"], (r.cost, b["cost"])   # ours is optimal
+                assert abs(r.cost - b["cost"]) <= 1e-4 * b["cost"], (r.cost, b["cost"])   # float32 g: ~1e-5 off
                 per_pair.append({"expansions": r.expansions, **b})
             row[name] = {"summary": summarise(per_pair, keys), "pairs": per_pair}
             print(f"density {dens:.2f} {name:4s}: " + ", ".join(f"{k} {v}" for k, v in row[name]["summary"].items()),
