@@ -301,3 +301,21 @@ def test_the_comparison_catches_an_overestimating_heuristic(monkeypatch: pytest.
         cfg = PlannerConfig(heuristic_weight=1.0, cost_travel_multiplier=multiplier, unknown_cost=unknown_cost)
         wrong += field_mismatches(cfg, seed)[1]
     assert wrong > 0
+
+
+@pytest.mark.parametrize(("start", "goal"), [((0.5, 0.5), (8.0, 5.5)), ((9.5, 0.5), (0.5, 9.0)),
+                                             ((1.0, 5.0), (9.0, 5.2))])
+def test_open_space_search_runs_down_the_equal_f_plateau(start: tuple[float, float],
+                                                          goal: tuple[float, float]) -> None:
+    """On an empty map the octile h is exact, so every cell of the start-goal parallelogram has f = C*: the
+    kernel's tie-break (LIFO in narrow buckets, cells whose f reaches the goal's g not expanded) must head
+    straight for the goal, not sweep the plateau (the FIFO kernel expanded 785-5151 cells on these)."""
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FP))
+    cm.set_static_map(GridMap(np.zeros((200, 200), np.int8), RES))
+    r = GlobalPlanner(PlannerConfig(heuristic_weight=1.0)).plan(cm, start, goal)
+    assert r.ok, r.reason
+    sc, sr = (int(v) for v in cm.world_to_cell(*start))
+    gc, gr = (int(v) for v in cm.world_to_cell(*goal))
+    dc, dr = abs(gc - sc), abs(gr - sr)
+    assert r.cost == pytest.approx(max(dc, dr) + (math.sqrt(2.0) - 1.0) * min(dc, dr), rel=1e-5)
+    assert r.expansions <= 2 * (max(dc, dr) + 1), r.expansions
