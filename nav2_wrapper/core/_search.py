@@ -22,6 +22,7 @@ from numba import njit
 SQRT2 = math.sqrt(2.0)
 STRAIGHT_TOL = 2e-7   # relative: a step within this of the cheapest counts as tying with it (float32 g)
 TIE_EPS = 1e-6
+UB_TOL = 1e-6   # relative: a cell whose f is within this of the goal's g found so far is not expanded
 """Relative weight added to h so that, among equal f = g + h, the node nearer the goal (larger g) pops first.
 
 Open areas have long plateaus of equal f; without this the search fans out over the whole plateau. The
@@ -204,6 +205,30 @@ def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, m
 
 
 @njit(cache=True, inline="always")
+def _interior(r, c, rows, cols, sr, sc, far):
+    """Off the map edge and more than ``far`` rows or columns from the start (outside any escape disc)."""
+    return 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far)
+
+
+@njit(cache=True, inline="always")
+def _close(rec, recg, cur, seen, goal, f):
+    """Close the popped cell ``cur`` (f = ``f``); True when it is to be expanded. False for a duplicate entry
+    (closed already at this g) and for a cell that cannot lead to a cheaper goal than the one found
+    (``_past_goal``): that one is closed unexpanded, so a better g found later re-files it like any closed
+    cell."""
+    if rec[2 * cur] != seen:
+        return False
+    rec[2 * cur] = seen + 1
+    return not _past_goal(rec, recg, seen, goal, f)
+
+
+@njit(cache=True, inline="always")
+def _past_goal(rec, recg, seen, goal, f):
+    """True when the goal already has a g in this plan and ``f`` is not below it (within UB_TOL)."""
+    return rec[2 * goal] >= seen and f >= np.float64(recg[2 * goal + 1]) * (1.0 - UB_TOL)
+
+
+@njit(cache=True, inline="always")
 def _room(buckets, need):
     """The bucket ring with room for ``need`` entries per bucket (doubled when short)."""
     if need <= buckets.shape[1]:
@@ -295,11 +320,19 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
     by at most (max step + √2·h_scale), so the open cells always fall into a sliding window of
-    ``nbuckets`` buckets of width ``delta`` (a ring of FIFO arrays). Push and pop are O(1), no sifting.
-    Inside a bucket the order is first in, first out, so a cell may be expanded before its best g is
-    known; it is then re-opened when the better g arrives (label correcting inside the bucket). Once a
-    bucket is empty every cell with f in it has its final g, because anything cheaper would come through
-    a cell with a smaller f, all of which are done; the goal's g is exact once its bucket is emptied.
+    ``nbuckets`` buckets of width ``delta`` (a ring of arrays). Push and pop are O(1), no sifting.
+    Inside a bucket the order is last in, first out, so a cell may be expanded before its best g is
+    known (the bucket spans f values up to ``delta`` apart); it is then re-opened when the better g arrives
+    (label correcting inside the bucket). Once a bucket is empty every cell with f in it has its final g,
+    because anything cheaper would come through a cell with a smaller f, all of which are done.
+    LIFO in narrow buckets is the tie-break: where f is flat (free space between the last obstacle and
+    the goal, where the octile h is exact, often thousands of cells with f = C*), the cell just reached
+    from the one being expanded, the deeper one, comes next, so the search runs down the plateau to the
+    goal instead of sweeping it breadth first. Once the goal has a g, a popped cell whose f is not below it
+    (within ``UB_TOL``) is closed without being expanded: no path through it is cheaper (h is a lower
+    bound). The search ends when a bucket is emptied and the goal's g is not above the next bucket's lower
+    edge (within UB_TOL): every open cell then has f >= that edge, so nothing cheaper can arrive and the
+    g is exact (to that relative tolerance, the order of the float32 rounding of the stored g).
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
@@ -315,12 +348,10 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
     seen = 2 * stamp
-    done = seen + 1
     inv = 1.0 / delta
     mask = nbuckets - 1
     buckets = np.empty((nbuckets, 1024), np.int32)
     counts = np.zeros(nbuckets, np.int64)
-    heads = np.zeros(nbuckets, np.int64)
     rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
     fullest = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
@@ -336,19 +367,18 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     expansions = 0
     while pending > 0:
         b = cb & mask
-        while heads[b] < counts[b]:
-            cur = buckets[b, heads[b]]
-            heads[b] += 1
+        while counts[b] > 0:
+            counts[b] -= 1              # last in, first out: see the docstring
+            cur = buckets[b, counts[b]]
             pending -= 1
-            if rec[2 * cur] != seen:
-                continue            # closed already at this g (a duplicate entry)
-            rec[2 * cur] = done
-            expansions += 1
-            buckets = _room(buckets, fullest + 8)
             r = cur // cols
             c = cur - r * cols
             gcur = np.float64(recg[2 * cur + 1])
-            if 0 < r < rows - 1 and 0 < c < cols - 1 and (abs(r - sr) > far or abs(c - sc) > far):
+            if not _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc)):
+                continue
+            expansions += 1
+            buckets = _room(buckets, fullest + 8)
+            if _interior(r, c, rows, cols, sr, sc, far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
                 skip = _prune(dirs[cur], behind, sides, mids, fo, table, flat, cur, offs)
@@ -379,9 +409,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
                                mask, buckets, counts)
                     pending += n > 0
                     fullest = max(fullest, n)
-        heads[b] = 0
-        counts[b] = 0
-        if rec[2 * goal] == done:
+        if _past_goal(rec, recg, seen, goal, (cb + 1) * delta):     # every open f >= the next bucket's edge
             return True, expansions
         cb += 1
     return False, expansions

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 
 from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig
+from nav2_wrapper.core import planner as planner_module
+from nav2_wrapper.core.costs import LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
@@ -209,3 +211,111 @@ def test_start_equals_goal_and_starts_on_the_map_edge() -> None:
             got = planner.plan(cm, centre(cm, e), centre(cm, a))
             assert got.ok, got.reason
             assert got.cost == pytest.approx(want, rel=1e-5)
+
+
+def random_cost_field(rng: np.random.Generator, rows: int = 40, cols: int = 56) -> Costmap:
+    """A costmap whose master costs are set directly: patches of random graded cost, blocked patches
+    (inscribed and lethal), unknown patches, thin blocked walls with diagonal gaps, and per-cell noise. No
+    inflation structure, so the kernel's weight-dependent move pruning meets cost steps in every direction."""
+    costs = np.zeros((rows, cols), np.uint8)
+    for _ in range(12):
+        r, c = rng.integers(0, rows), rng.integers(0, cols)
+        h, w = rng.integers(2, 12, 2)
+        costs[r:r + h, c:c + w] = rng.integers(1, MAX_NON_OBSTACLE + 1)
+    noisy = rng.random((rows, cols)) < 0.15
+    costs[noisy] = rng.integers(0, MAX_NON_OBSTACLE + 1, int(noisy.sum()))
+    for value in (NO_INFORMATION, NO_INFORMATION, INSCRIBED, LETHAL, LETHAL):
+        r, c = rng.integers(0, rows), rng.integers(0, cols)
+        h, w = rng.integers(1, 8, 2)
+        costs[r:r + h, c:c + w] = value
+    for _ in range(3):            # staircase walls: blocked cells touching only at corners (no squeeze through)
+        r, c = rng.integers(0, rows), rng.integers(0, cols)
+        for k in range(int(rng.integers(4, 15))):
+            if r + k < rows and c + k < cols:
+                costs[r + k, c + k] = LETHAL
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FP))
+    cm.set_static_map(GridMap(np.zeros((rows, cols), np.int8), RES))
+    cm.costs[:] = costs
+    return cm
+
+
+FIELD_CASES = [(30, 2.0, 200, True), (31, 0.0, 0, True), (32, 5.0, 252, True), (33, 1.0, 40, True),
+               (34, 3.0, 120, False), (35, 0.3, 252, True), (36, 2.0, 0, True), (37, 8.0, 100, False)]
+
+
+def field_pairs(cm: Costmap, table: np.ndarray, rng: np.random.Generator, n: int) -> list[tuple[np.ndarray, ...]]:
+    """n (start, goal) cells: goals traversable, starts traversable or (every 4th) in the inscribed band."""
+    ok = np.argwhere(np.isfinite(table[cm.costs]))
+    band = np.argwhere(cm.costs == INSCRIBED)
+    pairs = []
+    for k in range(n):
+        pool = band if k % 4 == 0 and len(band) else ok
+        pairs.append((pool[rng.integers(len(pool))], ok[rng.integers(len(ok))]))
+    return pairs
+
+
+def field_mismatches(cfg: PlannerConfig, seed: int) -> tuple[int, int]:
+    """(pairs compared, pairs whose planned cost differs from plain Dijkstra) on one random cost field."""
+    rng = np.random.default_rng(seed)
+    cm = random_cost_field(rng)
+    planner = GlobalPlanner(cfg)
+    table = planner.traversal_table()
+    esc_r2 = (cfg.escape_radius / RES) ** 2
+    esc_cost = 1.0 + cfg.cost_travel_multiplier * 2.0
+    checked = wrong = 0
+    for a, b in field_pairs(cm, table, rng, 40):
+        want = reference_cost(cm.costs, table, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), esc_r2, esc_cost)
+        if not math.isfinite(want):
+            continue
+        got = planner.plan(cm, centre(cm, a), centre(cm, b))
+        assert got.ok, got.reason
+        checked += 1
+        wrong += got.cost != pytest.approx(want, rel=1e-5, abs=1e-4)
+    return checked, wrong
+
+
+@pytest.mark.parametrize(("seed", "multiplier", "unknown_cost", "smooth"), FIELD_CASES)
+def test_cost_equals_plain_dijkstra_on_random_cost_fields(seed: int, multiplier: float, unknown_cost: int,
+                                                         smooth: bool) -> None:
+    """Arbitrary graded costs (not the smooth inflation profile), unknown patches from free to the dearest
+    charge, diagonal-only walls, starts in the inscribed band: 40 pairs per field, every cost exact."""
+    cfg = PlannerConfig(heuristic_weight=1.0, cost_travel_multiplier=multiplier, unknown_cost=unknown_cost,
+                        smooth_path=smooth)
+    checked, wrong = field_mismatches(cfg, seed)
+    assert checked >= 25, checked
+    assert wrong == 0, (seed, wrong, checked)
+
+
+def test_the_comparison_catches_an_overestimating_heuristic(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The check above has teeth: the same kernel with the heuristic 15 % too large (inadmissible) returns a
+    dearer path on some of these pairs, and the comparison reports it."""
+
+    class Inflated(planner_module._Search):
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            self.h_scale *= 1.15
+
+    monkeypatch.setattr(planner_module, "_Search", Inflated)
+    wrong = 0
+    for seed, multiplier, unknown_cost, _ in FIELD_CASES[:4]:
+        cfg = PlannerConfig(heuristic_weight=1.0, cost_travel_multiplier=multiplier, unknown_cost=unknown_cost)
+        wrong += field_mismatches(cfg, seed)[1]
+    assert wrong > 0
+
+
+@pytest.mark.parametrize(("start", "goal"), [((0.5, 0.5), (8.0, 5.5)), ((9.5, 0.5), (0.5, 9.0)),
+                                             ((1.0, 5.0), (9.0, 5.2))])
+def test_open_space_search_runs_down_the_equal_f_plateau(start: tuple[float, float],
+                                                          goal: tuple[float, float]) -> None:
+    """On an empty map the octile h is exact, so every cell of the start-goal parallelogram has f = C*: the
+    kernel's tie-break (LIFO in narrow buckets, cells whose f reaches the goal's g not expanded) must head
+    straight for the goal, not sweep the plateau (the FIFO kernel expanded 785-5151 cells on these)."""
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FP))
+    cm.set_static_map(GridMap(np.zeros((200, 200), np.int8), RES))
+    r = GlobalPlanner(PlannerConfig(heuristic_weight=1.0)).plan(cm, start, goal)
+    assert r.ok, r.reason
+    sc, sr = (int(v) for v in cm.world_to_cell(*start))
+    gc, gr = (int(v) for v in cm.world_to_cell(*goal))
+    dc, dr = abs(gc - sc), abs(gr - sr)
+    assert r.cost == pytest.approx(max(dc, dr) + (math.sqrt(2.0) - 1.0) * min(dc, dr), rel=1e-5)
+    assert r.expansions <= 2 * (max(dc, dr) + 1), r.expansions
