@@ -10,8 +10,9 @@ Why sequential: the demos share a 2-core machine with everything else, and each 
 latency at the chosen real-time factor) is part of what is measured; running two at once would make
 the contacts a measure of the machine, not of navigation.
 
-A ``random:N`` scene whose waypoints all lie near the start is refused by ``rbnx demo`` before boot
-(exit 2); such scenes are reported as "refused" with rbnx's reason.
+The generator gives every ``random:N`` at least two rooms (a one-room draw is re-drawn from the seed), so
+none is refused; a scene whose waypoints all lie near the start (a hand-written YAML) is refused by
+``rbnx demo`` before boot (exit 2) and reported as "refused" with rbnx's reason.
 """
 
 from __future__ import annotations

@@ -29,6 +29,16 @@ def test_goals_none_when_every_waypoint_is_too_close() -> None:
     assert choose_goals({}, (0.0, 0.0), 3) == []
 
 
+def test_every_generated_scene_gives_five_goals() -> None:
+    """`rbnx demo --scene random:N --goals 5` has five goals (none within 1 m of where the robot is) for
+    N = 1 … 50: the generator never yields a one-room layout whose only waypoint is the start."""
+    from hal_panda_mobile.files.scene import load_scene
+
+    for seed in range(1, 51):
+        s = load_scene(f"random:{seed}")
+        assert len(choose_goals(dict(s.waypoints), s.start[:2], 5)) == 5, seed
+
+
 def test_parse_detail_reads_the_nav_status_line() -> None:
     p = parse_detail("2.88 m remaining, ETA 6 s, 1 recoveries, blocked")
     assert (p.remaining_m, p.eta_s, p.recoveries) == (2.88, 6.0, 1)
