@@ -109,7 +109,8 @@ def reduce_summary(s: dict[str, Any]) -> dict[str, Any]:
         "demo_wall_s": s.get("wall_s"),
         "sim_s": round(sum(g.get("duration_sim_s") or 0.0 for g in goals), 1),
         "outcomes": [{"name": g.get("name"), "state": g.get("state"), "contacts": g.get("collision_count", 0),
-                      "detail": g.get("detail", ""), "failure": g.get("failure", "")} for g in goals],
+                      "detail": g.get("detail", ""), "failure": g.get("failure", ""),
+                      "collisions": g.get("collisions", [])} for g in goals],
     }
     if s.get("error"):
         out["reason"] = s["error"]

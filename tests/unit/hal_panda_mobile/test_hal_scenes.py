@@ -14,6 +14,7 @@ from hal_panda_mobile.sim import OdomNoise, PandaMobileSim, SimConfigError
 from hal_panda_mobile.sim.raster import rasterize, reachable
 from hal_panda_mobile.sim.scene import first_collision
 from hal_panda_mobile.sim.worldgen import MIN_ROOMS, ROBOT_CLEAR_RADIUS, _room_grid
+from rbnx.demo.goals import choose_goals
 from robonix_api.mapfile import save_map_yaml
 from robonix_common.grid import FREE, OCCUPIED, GridMap, merge_cells
 
@@ -63,7 +64,7 @@ def test_random_scene_seeded_and_valid(robot, seed):
 
 def test_random_scenes_1_to_50_all_have_rooms_to_drive_to(robot):
     """Every generated scene is a usable demo: >= MIN_ROOMS room centres, one farther than 1 m from the start,
-    all reachable from the start with the base's clearance, and the start pose free."""
+    all reachable from the start with the base's clearance, and five goals for `rbnx demo --goals 5`."""
     for seed in range(1, 51):
         scene = load_scene(f"random:{seed}", robot=robot)
         assert len(scene.waypoints) >= MIN_ROOMS, seed
@@ -71,6 +72,8 @@ def test_random_scenes_1_to_50_all_have_rooms_to_drive_to(robot):
         assert far, seed
         grid = rasterize(scene.obstacles(), scene.bounds, 0.05, inflate=ROBOT_CLEAR_RADIUS - 0.05, overlap=False)
         assert all(reachable(grid, scene.start[:2], list(scene.waypoints.values()))), seed
+        # what `rbnx demo --scene random:N --goals 5` will drive: five goals, none within 1 m of the robot
+        assert len(choose_goals(dict(scene.waypoints), scene.start[:2], 5, None, 1.0)) == 5, seed
 
 
 def test_one_room_draw_is_redrawn_and_two_room_seeds_keep_their_world(robot):

@@ -29,16 +29,6 @@ def test_goals_none_when_every_waypoint_is_too_close() -> None:
     assert choose_goals({}, (0.0, 0.0), 3) == []
 
 
-def test_every_generated_scene_gives_five_goals() -> None:
-    """`rbnx demo --scene random:N --goals 5` has five goals (none within 1 m of where the robot is) for
-    N = 1 … 50: the generator never yields a one-room layout whose only waypoint is the start."""
-    from hal_panda_mobile.files.scene import load_scene
-
-    for seed in range(1, 51):
-        s = load_scene(f"random:{seed}")
-        assert len(choose_goals(dict(s.waypoints), s.start[:2], 5)) == 5, seed
-
-
 def test_parse_detail_reads_the_nav_status_line() -> None:
     p = parse_detail("2.88 m remaining, ETA 6 s, 1 recoveries, blocked")
     assert (p.remaining_m, p.eta_s, p.recoveries) == (2.88, 6.0, 1)
@@ -73,3 +63,28 @@ def test_a_goal_reached_with_a_contact_is_a_failure_in_summary_table_and_exit_co
     text = out.getvalue()
     assert "CONTACT" in text
     assert "1/2 goals succeeded (1 reached with a contact: failed)" in text
+
+
+def test_contacts_carry_the_robot_pose_and_the_nav_status_in_force() -> None:
+    """A contact record says where the robot was just before it and what navigation was doing then."""
+    import threading
+
+    from rbnx.demo.goalrun import GoalRunner
+    from rbnx.demo.record import Recorder
+    from rbnx.demo.rpc import GroundTruth
+
+    rec = Recorder(rpc=None, domain_id=0)  # type: ignore[arg-type]  # only its logs are used here
+    rec.gt_odom += [(12.0, 1.0, 2.0, 0.5), (12.4, 1.1, 2.0, 0.6), (12.8, 1.2, 2.0, 0.7)]
+    runner = GoalRunner(None, rec, None, threading.Event(), 10.0, None)  # type: ignore[arg-type]
+    res = GoalResult(1, Goal("b", 3.0, 1.0), collisions=[_contact()])
+    for t, detail in [(10.0, "2.90 m remaining, ETA 6 s, 0 recoveries"), (11.0, "2.10 m remaining, ETA 4 s, 0 "
+                      "recoveries"), (12.0, "recovering: escape after: blocked (1 recoveries)"),
+                      (13.0, "1.00 m remaining, ETA 2 s, 1 recoveries")]:
+        rec.gt.append(GroundTruth(0.0, 0.0, 0.0, t))
+        runner._note_status(res, "RUNNING", detail)
+    assert [e["sim_time"] for e in res.nav_events] == [10.0, 12.0, 13.0]   # the countdown is one entry
+    runner._contact_context(res)
+    c = res.collisions[0]
+    assert c["robot_pose"] == {"sim_time": 12.4, "x": 1.1, "y": 2.0, "theta": 0.6}
+    assert c["nav_detail"].startswith("recovering: escape")
+    assert "kind" not in res.as_dict()["nav_events"][0]
