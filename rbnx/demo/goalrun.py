@@ -10,6 +10,7 @@ import time
 from typing import Any
 
 from rbnx.demo.boot import BootChild, DemoError
+from rbnx.demo.clearance import ClearanceField
 from rbnx.demo.goals import TERMINAL, fmt_s, parse_detail, path_length
 from rbnx.demo.record import Recorder
 from rbnx.demo.report import GoalResult, LiveLine
@@ -24,9 +25,10 @@ class GoalRunner:
     """Send one goal, follow it to a terminal state with a live line, measure it against ground truth."""
 
     def __init__(self, rpc: DemoRpc, rec: Recorder, boot: BootChild, stop: threading.Event,
-                 timeout_s: float, line: LiveLine) -> None:
+                 timeout_s: float, line: LiveLine, clearance: ClearanceField | None = None) -> None:
         self.rpc, self.rec, self.boot, self.stop = rpc, rec, boot, stop
         self.timeout_s, self.line = timeout_s, line
+        self.clearance = clearance
 
     def run(self, res: GoalResult, n: int) -> GoalResult:
         g = res.goal
@@ -122,6 +124,9 @@ class GoalRunner:
             res.final_error_m = math.hypot(gt1.x - res.goal.x, gt1.y - res.goal.y)
             if gt0 is not None:
                 res.duration_sim_s = gt1.sim_time - gt0.sim_time
+                if self.clearance is not None:
+                    closest = self.clearance.closest(self.rec.gt_poses(gt0.sim_time, gt1.sim_time))
+                    res.closest = closest.as_dict() if closest is not None else None
         if gt0 is not None:
             try:
                 res.collisions = [c.as_dict() for c in self.rpc.collisions(gt0.sim_time)]

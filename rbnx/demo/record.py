@@ -170,6 +170,11 @@ class Recorder:
         with self._lock:
             return [(x, y) for t, x, y, _ in self.gt_odom if t0 <= t <= t1]
 
+    def gt_poses(self, t0: float, t1: float) -> list[tuple[float, float, float]]:
+        """Dense ground-truth poses (x, y, yaw) stamped within [t0, t1] sim seconds (empty without DDS)."""
+        with self._lock:
+            return [(x, y, yaw) for t, x, y, yaw in self.gt_odom if t0 <= t <= t1]
+
     def pose_before(self, sim_time: float) -> tuple[float, float, float, float] | None:
         """The latest ground-truth (sim time, x, y, yaw) stamped at or before ``sim_time``: the dense topic's
         when it has one, else the sampled poses' (None when neither does)."""
