@@ -10,8 +10,9 @@ Why sequential: the demos share a 2-core machine with everything else, and each 
 latency at the chosen real-time factor) is part of what is measured; running two at once would make
 the contacts a measure of the machine, not of navigation.
 
-A ``random:N`` scene whose waypoints all lie near the start is refused by ``rbnx demo`` before boot
-(exit 2); such scenes are reported as "refused" with rbnx's reason.
+The generator gives every ``random:N`` at least two rooms (a one-room draw is re-drawn from the seed), so
+none is refused; a scene whose waypoints all lie near the start (a hand-written YAML) is refused by
+``rbnx demo`` before boot (exit 2) and reported as "refused" with rbnx's reason.
 """
 
 from __future__ import annotations
@@ -106,9 +107,12 @@ def reduce_summary(s: dict[str, Any]) -> dict[str, Any]:
         "contacts": sum(int(g.get("collision_count", 0)) for g in goals),
         "touched": touched,
         "demo_wall_s": s.get("wall_s"),
+        # the true body's closest approach to the true obstacles over the demo (rbnx/demo/clearance.py)
+        "min_clearance_m": min((g["closest"]["clearance_m"] for g in goals if g.get("closest")), default=None),
         "sim_s": round(sum(g.get("duration_sim_s") or 0.0 for g in goals), 1),
         "outcomes": [{"name": g.get("name"), "state": g.get("state"), "contacts": g.get("collision_count", 0),
-                      "detail": g.get("detail", ""), "failure": g.get("failure", "")} for g in goals],
+                      "detail": g.get("detail", ""), "failure": g.get("failure", ""),
+                      "closest": g.get("closest"), "collisions": g.get("collisions", [])} for g in goals],
     }
     if s.get("error"):
         out["reason"] = s["error"]
@@ -118,14 +122,19 @@ def reduce_summary(s: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _cm(metres: float | None) -> str:
+    return "-" if metres is None else f"{100 * metres:.0f} cm"
+
+
 def print_table(rows: list[dict[str, Any]]) -> None:
-    head = f"{'scene':<12} {'status':<8} {'goals':>7} {'reached':>7} {'contacts':>8} {'wall':>7}  notes"
+    head = f"{'scene':<12} {'status':<8} {'goals':>7} {'reached':>7} {'contacts':>8} {'closest':>8} {'wall':>7}  notes"
     print(head)
     print("-" * len(head))
     for r in rows:
         note = ", ".join(r.get("touched", [])) or r.get("reason", "")
         print(f"{r['scene']:<12} {r['status']:<8} {r['goals_succeeded']:>3}/{r['goals_planned']:<3} "
-              f"{r['goals_reached']:>7} {r['contacts']:>8} {r['wall_s']:>6.0f}s  {note[:80]}")
+              f"{r['goals_reached']:>7} {r['contacts']:>8} {_cm(r.get('min_clearance_m')):>8} {r['wall_s']:>6.0f}s  "
+              f"{note[:80]}")
     ran = [r for r in rows if r["status"] != "refused"]
     print(f"{sum(r['goals_succeeded'] for r in ran)}/{sum(r['goals_planned'] for r in ran)} goals succeeded, "
           f"{sum(r['contacts'] for r in ran)} contacts, {sum(r['status'] == 'ok' for r in ran)}/{len(ran)} demos "

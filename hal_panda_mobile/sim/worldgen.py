@@ -20,6 +20,8 @@ from .robot import RobotDescription
 from .scene import Box, Cylinder, Scene, Wall, first_collision
 
 ROBOT_CLEAR_RADIUS = 0.3  # half the robot width + margin: what a doorway must leave free
+MIN_ROOMS = 2  # a generated layout needs somewhere to go: the waypoints are the room centres, one is the start
+MAX_LAYOUT_DRAWS = 32  # re-draws of the room grid per seed; P(one room) is 1/6, so 32 misses never happen
 
 
 def _free_start(grid: GridMap, free: np.ndarray) -> tuple[float, float]:
@@ -75,6 +77,22 @@ def _walls_with_doors(a: float, b: float, fixed: float, vertical: bool, door: fl
     return out, ((fixed, mid) if vertical else (mid, fixed))
 
 
+def _usable_room_grid(seed: int) -> tuple[np.random.Generator, tuple[float, float, np.ndarray, np.ndarray]]:
+    """The room grid for ``seed`` with at least MIN_ROOMS rooms, and the generator to draw the rest from.
+
+    Why: the waypoints are the room centres and the robot starts at one of them, so a one-room layout has
+    nothing to drive to (``rbnx demo`` would have to refuse it). The first draw uses ``default_rng(seed)``
+    exactly as before, so every seed that already had two rooms keeps its world; a one-room draw is
+    replaced by a draw from ``default_rng([seed, k])`` for k = 1, 2, ... until one qualifies. Deterministic:
+    the same seed still always gives the same world."""
+    for k in range(MAX_LAYOUT_DRAWS):
+        rng = np.random.default_rng(seed if k == 0 else [seed, k])
+        layout = _room_grid(rng)
+        if (len(layout[2]) - 1) * (len(layout[3]) - 1) >= MIN_ROOMS:
+            return rng, layout
+    raise SimConfigError(f"random:{seed}: no layout with {MIN_ROOMS} rooms in {MAX_LAYOUT_DRAWS} draws")
+
+
 def _room_grid(rng: np.random.Generator) -> tuple[float, float, np.ndarray, np.ndarray]:
     """Outer size (W, H) and the jittered x / y lines that split it into rooms."""
     W, H = float(rng.uniform(8, 16)), float(rng.uniform(8, 14))
@@ -128,11 +146,10 @@ def _furniture_candidate(k: int, xs: np.ndarray, ys: np.ndarray, keep_clear: lis
 
 def random_scene(robot: RobotDescription, seed: int = 0, *, name: str | None = None,
                  start: Pose2D | None = None) -> Scene:
-    """Rooms on a jittered grid, every neighbouring pair joined by a 1.1 m doorway, furniture that never
-    blocks a doorway or disconnects a room (for ``robot``'s footprint), start at a free room centre.
-    Same seed -> same world."""
-    rng = np.random.default_rng(seed)
-    W, H, xs, ys = _room_grid(rng)
+    """Rooms on a jittered grid (at least MIN_ROOMS, see :func:`_usable_room_grid`), every neighbouring pair
+    joined by a 1.2 m doorway, furniture that never blocks a doorway or disconnects a room (for ``robot``'s
+    footprint), start at a free room centre. Same seed -> same world."""
+    rng, (W, H, xs, ys) = _usable_room_grid(seed)
     walls, doors = _room_walls(W, H, xs, ys, rng)
     nx, ny = len(xs) - 1, len(ys) - 1
     centres = {f"room_{i}_{j}": ((xs[i] + xs[i + 1]) / 2, (ys[j] + ys[j + 1]) / 2)

@@ -88,9 +88,11 @@ def resolve_scene(scene: str) -> str:
 
 
 def check_scene_goals(scene: str) -> None:
-    """A ``random:N`` scene is generated here (deterministically, as the simulator will) so that one whose
-    waypoints all lie within MIN_GOAL_DIST_M of the start is refused before anything is booted."""
-    if not scene.startswith("random"):
+    """A ``random:N`` scene is generated here (deterministically, as the simulator will) and a scene YAML is
+    loaded, so that one whose waypoints all lie within MIN_GOAL_DIST_M of the start is refused before anything
+    is booted. (The generator always gives two rooms or more; a hand-written YAML may still have nothing to
+    drive to.) Built-in scenes are checked by their own tests and skip the simulator import here."""
+    if scene in builtin_scenes() and scene != "random":
         return
     from hal_panda_mobile.files.scene import load_scene
     from hal_panda_mobile.sim import SimConfigError
@@ -247,7 +249,8 @@ def run(args: argparse.Namespace) -> int:
                                 f"{MIN_GOAL_DIST_M:g} m from the robot; pick another --scene")
             print(f"{len(goals)} goal(s) in scene {info.get('name')}: "
                   + ", ".join(f"{g.name} ({g.x:.2f}, {g.y:.2f})" for g in goals), flush=True)
-            runner = GoalRunner(rpc, rec, boot, stop.event, args.timeout_per_goal, line)
+            runner = GoalRunner(rpc, rec, boot, stop.event, args.timeout_per_goal, line,
+                                _clearance_field(scene, info.get("name"), rec))
             for i, g in enumerate(goals, 1):
                 if stop.event.is_set():
                     break
@@ -264,6 +267,22 @@ def run(args: argparse.Namespace) -> int:
             live.stop(summary)
             code = _finish(code, stop, boot, rpc, rec, results, goals, summary, out, t_start)
     return code
+
+
+def _clearance_field(scene: str, sim_name: str | None, rec: Recorder) -> Any:
+    """The ground-truth clearance field for the scene the simulator loaded, or None (with a warning) when it
+    cannot be built here or names another scene: the closest-approach figures are then left out."""
+    from rbnx.demo.clearance import ClearanceField
+
+    try:
+        field = ClearanceField.for_scene(scene)
+    except Exception as exc:  # a figure of the report, never a reason to fail the demo
+        rec.warnings.append(f"clearance: not measured ({type(exc).__name__}: {exc})")
+        return None
+    if sim_name and field.scene_name != sim_name:
+        rec.warnings.append(f"clearance: not measured (simulator scene {sim_name!r}, here {field.scene_name!r})")
+        return None
+    return field
 
 
 def _finish(code: int, stop: _Stop, boot: BootChild, rpc: DemoRpc | None, rec: Recorder | None,

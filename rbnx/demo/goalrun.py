@@ -4,26 +4,31 @@ the simulator's ground truth (path length, final error, collisions) and keep its
 from __future__ import annotations
 
 import math
+import re
 import threading
 import time
 from typing import Any
 
 from rbnx.demo.boot import BootChild, DemoError
+from rbnx.demo.clearance import ClearanceField
 from rbnx.demo.goals import TERMINAL, fmt_s, parse_detail, path_length
 from rbnx.demo.record import Recorder
 from rbnx.demo.report import GoalResult, LiveLine
 from rbnx.demo.rpc import DemoRpc
 
 POLL_S = 0.3
+MAX_NAV_EVENTS = 60
+_NUMBERS = re.compile(r"[0-9]+(?:\.[0-9]+)?")
 
 
 class GoalRunner:
     """Send one goal, follow it to a terminal state with a live line, measure it against ground truth."""
 
     def __init__(self, rpc: DemoRpc, rec: Recorder, boot: BootChild, stop: threading.Event,
-                 timeout_s: float, line: LiveLine) -> None:
+                 timeout_s: float, line: LiveLine, clearance: ClearanceField | None = None) -> None:
         self.rpc, self.rec, self.boot, self.stop = rpc, rec, boot, stop
         self.timeout_s, self.line = timeout_s, line
+        self.clearance = clearance
 
     def run(self, res: GoalResult, n: int) -> GoalResult:
         g = res.goal
@@ -60,6 +65,7 @@ class GoalRunner:
                 self.stop.wait(POLL_S)
                 continue
             st_state, res.detail = st.state, st.detail
+            self._note_status(res, st_state, res.detail)
             if st_state in TERMINAL:
                 break
             self.line.update(st_state, self._progress(f"goal {res.index}/{n} {g.name}", st_state, res.detail, gt0, t0))
@@ -73,6 +79,27 @@ class GoalRunner:
         self.line.done(f"{tag}: {res.outcome} in {fmt_s(res.duration_sim_s)} sim / {fmt_s(res.duration_wall_s)} "
                        f"wall{err} — {res.detail}")
         return res
+
+    def _note_status(self, res: GoalResult, state: str, detail: str) -> None:
+        """Keep a status whose wording (numbers aside) differs from the last one kept, stamped with the latest
+        ground-truth sim time: the 'remaining' countdown collapses into one entry, a recovery or 'blocked'
+        shows as its own."""
+        kind = f"{state} {_NUMBERS.sub('#', detail)}"
+        if (res.nav_events and res.nav_events[-1]["kind"] == kind) or len(res.nav_events) >= MAX_NAV_EVENTS:
+            return
+        last = self.rec.gt[-1] if self.rec.gt else None
+        res.nav_events.append({"sim_time": round(last.sim_time, 3) if last is not None else None, "state": state,
+                               "detail": detail, "kind": kind})
+
+    def _contact_context(self, res: GoalResult) -> None:
+        """Each contact with the robot's ground-truth pose just before it and the nav status then in force."""
+        for c in res.collisions:
+            p = self.rec.pose_before(c["sim_time"])
+            if p is not None:
+                c["robot_pose"] = {"sim_time": round(p[0], 3), "x": round(p[1], 3), "y": round(p[2], 3),
+                                   "theta": round(p[3], 3)}
+            before = [e for e in res.nav_events if e["sim_time"] is not None and e["sim_time"] <= c["sim_time"]]
+            c["nav_detail"] = before[-1]["detail"] if before else ""
 
     def _progress(self, tag: str, state: str, detail: str, gt0: Any, t0: float) -> str:
         p = parse_detail(detail)
@@ -97,9 +124,13 @@ class GoalRunner:
             res.final_error_m = math.hypot(gt1.x - res.goal.x, gt1.y - res.goal.y)
             if gt0 is not None:
                 res.duration_sim_s = gt1.sim_time - gt0.sim_time
+                if self.clearance is not None:
+                    closest = self.clearance.closest(self.rec.gt_poses(gt0.sim_time, gt1.sim_time))
+                    res.closest = closest.as_dict() if closest is not None else None
         if gt0 is not None:
             try:
                 res.collisions = [c.as_dict() for c in self.rpc.collisions(gt0.sim_time)]
+                self._contact_context(res)
             except DemoError as exc:
                 self.rec.warnings.append(f"collisions: {exc}")
         plan = self.rec.plan_for(plan_mark, end_plan, (res.goal.x, res.goal.y))

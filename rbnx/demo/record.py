@@ -39,7 +39,7 @@ class Recorder:
         self.domain_id = domain_id
         self.period = 1.0 / rate_hz
         self.gt: list[GroundTruth] = []
-        self.gt_odom: list[tuple[float, float, float]] = []  # (sim time, x, y) from the dense topic
+        self.gt_odom: list[tuple[float, float, float, float]] = []  # (sim time, x, y, yaw) from the dense topic
         self.map_traj: list[tuple[float, float, float]] = []
         self.plans: list[PlanRecord] = []
         self.grid_msg: Any = None
@@ -118,9 +118,10 @@ class Recorder:
 
     def _on_gt_odom(self, msg: Any) -> None:
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        p = msg.pose.pose.position
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         with self._lock:
-            self.gt_odom.append((t, p.x, p.y))
+            self.gt_odom.append((t, p.x, p.y, yaw))
 
     def _on_map(self, msg: Any) -> None:
         with self._lock:
@@ -167,7 +168,22 @@ class Recorder:
     def gt_path(self, t0: float, t1: float) -> list[tuple[float, float]]:
         """Dense ground-truth positions stamped within [t0, t1] sim seconds (empty without DDS)."""
         with self._lock:
-            return [(x, y) for t, x, y in self.gt_odom if t0 <= t <= t1]
+            return [(x, y) for t, x, y, _ in self.gt_odom if t0 <= t <= t1]
+
+    def gt_poses(self, t0: float, t1: float) -> list[tuple[float, float, float]]:
+        """Dense ground-truth poses (x, y, yaw) stamped within [t0, t1] sim seconds (empty without DDS)."""
+        with self._lock:
+            return [(x, y, yaw) for t, x, y, yaw in self.gt_odom if t0 <= t <= t1]
+
+    def pose_before(self, sim_time: float) -> tuple[float, float, float, float] | None:
+        """The latest ground-truth (sim time, x, y, yaw) stamped at or before ``sim_time``: the dense topic's
+        when it has one, else the sampled poses' (None when neither does)."""
+        with self._lock:
+            dense = [s for s in self.gt_odom if s[0] <= sim_time]
+            if dense:
+                return dense[-1]
+            sampled = [g for g in self.gt if g.sim_time <= sim_time]
+        return (sampled[-1].sim_time, sampled[-1].x, sampled[-1].y, sampled[-1].theta) if sampled else None
 
     def plan_for(self, start: int, end: int, target: tuple[float, float]) -> np.ndarray | None:
         """The goal's first plan that ends near its target (the route as first planned), else its last one."""

@@ -71,6 +71,11 @@ class GoalResult:
     final_pose: tuple[float, float, float] | None = None
     final_error_m: float | None = None
     collisions: list[dict[str, Any]] = field(default_factory=list)
+    # nav status changes seen while driving (sim time, state, detail), numbers aside: what navigation was doing
+    # (following, blocked, which recovery) when a contact happened; each contact gets the entry then in force
+    nav_events: list[dict[str, Any]] = field(default_factory=list)
+    # the true footprint's closest approach to the true obstacles while driving (rbnx/demo/clearance.py)
+    closest: dict[str, float] | None = None
     plan: Any = field(default=None, repr=False, compare=False)  # (N, 2) map-frame route, for map.png only
 
     @property
@@ -100,6 +105,7 @@ class GoalResult:
         if d["final_pose"] is not None:
             d["final_pose"] = {"x": round(d["final_pose"][0], 3), "y": round(d["final_pose"][1], 3),
                                "theta": round(d["final_pose"][2], 3), "frame": "world (ground truth)"}
+        d["nav_events"] = [{k: v for k, v in e.items() if k != "kind"} for e in d["nav_events"]]
         d["collision_count"] = len(d["collisions"])
         d["reached"] = self.reached
         d["succeeded"] = self.succeeded

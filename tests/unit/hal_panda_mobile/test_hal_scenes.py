@@ -13,7 +13,8 @@ from hal_panda_mobile.files import available_scenes, load_robot_description, loa
 from hal_panda_mobile.sim import OdomNoise, PandaMobileSim, SimConfigError
 from hal_panda_mobile.sim.raster import rasterize, reachable
 from hal_panda_mobile.sim.scene import first_collision
-from hal_panda_mobile.sim.worldgen import ROBOT_CLEAR_RADIUS
+from hal_panda_mobile.sim.worldgen import MIN_ROOMS, ROBOT_CLEAR_RADIUS, _room_grid
+from rbnx.demo.goals import choose_goals
 from robonix_api.mapfile import save_map_yaml
 from robonix_common.grid import FREE, OCCUPIED, GridMap, merge_cells
 
@@ -59,6 +60,33 @@ def test_random_scene_seeded_and_valid(robot, seed):
     grid = rasterize(a.obstacles(), a.bounds, 0.05, inflate=ROBOT_CLEAR_RADIUS - 0.05, overlap=False)
     assert all(reachable(grid, a.start[:2], list(a.waypoints.values())))
     PandaMobileSim(robot, a)  # start free, compiles
+
+
+def test_random_scenes_1_to_50_all_have_rooms_to_drive_to(robot):
+    """Every generated scene is a usable demo: >= MIN_ROOMS room centres, one farther than 1 m from the start,
+    all reachable from the start with the base's clearance, and five goals for `rbnx demo --goals 5`."""
+    for seed in range(1, 51):
+        scene = load_scene(f"random:{seed}", robot=robot)
+        assert len(scene.waypoints) >= MIN_ROOMS, seed
+        far = [p for p in scene.waypoints.values() if math.dist(p, scene.start[:2]) > 1.0]
+        assert far, seed
+        grid = rasterize(scene.obstacles(), scene.bounds, 0.05, inflate=ROBOT_CLEAR_RADIUS - 0.05, overlap=False)
+        assert all(reachable(grid, scene.start[:2], list(scene.waypoints.values()))), seed
+        # what `rbnx demo --scene random:N --goals 5` will drive: five goals, none within 1 m of the robot
+        assert len(choose_goals(dict(scene.waypoints), scene.start[:2], 5, None, 1.0)) == 5, seed
+
+
+def test_one_room_draw_is_redrawn_and_two_room_seeds_keep_their_world(robot):
+    """random:1's first room-grid draw is a single room: the scene comes from a re-draw (same every time);
+    random:2's first draw already has rooms, so its world is the first draw's, as before the re-draw rule."""
+    _, _, xs, ys = _room_grid(np.random.default_rng(1))
+    assert (len(xs) - 1) * (len(ys) - 1) == 1
+    one = load_scene("random:1", robot=robot)
+    assert len(one.waypoints) >= MIN_ROOMS
+    assert one == load_scene("random:1", robot=robot)
+    w, h, xs, ys = _room_grid(np.random.default_rng(2))
+    assert (len(xs) - 1) * (len(ys) - 1) >= MIN_ROOMS
+    assert load_scene("random:2", robot=robot).bounds == (0.0, 0.0, w, h)
 
 
 def test_merge_cells_covers_exactly():

@@ -4,6 +4,7 @@ errors, which run the CLI, are in tests/integration/rbnx/test_demo_usage_errors.
 from __future__ import annotations
 
 import io
+import math
 
 import pytest
 
@@ -63,3 +64,50 @@ def test_a_goal_reached_with_a_contact_is_a_failure_in_summary_table_and_exit_co
     text = out.getvalue()
     assert "CONTACT" in text
     assert "1/2 goals succeeded (1 reached with a contact: failed)" in text
+
+
+def test_contacts_carry_the_robot_pose_and_the_nav_status_in_force() -> None:
+    """A contact record says where the robot was just before it and what navigation was doing then."""
+    import threading
+
+    from rbnx.demo.goalrun import GoalRunner
+    from rbnx.demo.record import Recorder
+    from rbnx.demo.rpc import GroundTruth
+
+    rec = Recorder(rpc=None, domain_id=0)  # type: ignore[arg-type]  # only its logs are used here
+    rec.gt_odom += [(12.0, 1.0, 2.0, 0.5), (12.4, 1.1, 2.0, 0.6), (12.8, 1.2, 2.0, 0.7)]
+    runner = GoalRunner(None, rec, None, threading.Event(), 10.0, None)  # type: ignore[arg-type]
+    res = GoalResult(1, Goal("b", 3.0, 1.0), collisions=[_contact()])
+    for t, detail in [(10.0, "2.90 m remaining, ETA 6 s, 0 recoveries"), (11.0, "2.10 m remaining, ETA 4 s, 0 "
+                      "recoveries"), (12.0, "recovering: escape after: blocked (1 recoveries)"),
+                      (13.0, "1.00 m remaining, ETA 2 s, 1 recoveries")]:
+        rec.gt.append(GroundTruth(0.0, 0.0, 0.0, t))
+        runner._note_status(res, "RUNNING", detail)
+    assert [e["sim_time"] for e in res.nav_events] == [10.0, 12.0, 13.0]   # the countdown is one entry
+    runner._contact_context(res)
+    c = res.collisions[0]
+    assert c["robot_pose"] == {"sim_time": 12.4, "x": 1.1, "y": 2.0, "theta": 0.6}
+    assert c["nav_detail"].startswith("recovering: escape")
+    assert "kind" not in res.as_dict()["nav_events"][0]
+
+
+def test_clearance_is_the_footprint_outline_distance_to_the_nearest_obstacle() -> None:
+    """A 0.7 x 0.5 m body beside a wall: the clearance is the gap between its side and the wall (within a
+    cell), 0 once it overlaps, and the closest pose of a stretch is the one reported."""
+    import numpy as np
+
+    from rbnx.demo.clearance import ClearanceField
+
+    res = 0.02
+    occ = np.zeros((200, 200), dtype=bool)          # 4 x 4 m from (0, 0); a wall filling x >= 3 m
+    occ[:, 150:] = True
+    fp = [(0.35, 0.25), (-0.35, 0.25), (-0.35, -0.25), (0.35, -0.25)]
+    field = ClearanceField(occ, (0.0, 0.0), res, fp)
+    # facing the wall, the front edge at x = 2.35 + 0.35: 0.30 m from it; turned 90° at x 2.2, the side at 2.45
+    assert field.closest([(2.35, 2.0, 0.0)]).clearance_m == pytest.approx(0.30, abs=res)
+    assert field.closest([(2.2, 2.0, math.pi / 2)]).clearance_m == pytest.approx(0.55, abs=res)
+    near = field.closest([(1.0, 2.0, 0.0), (2.5, 2.0, 0.0), (2.0, 2.0, 0.0)])
+    assert near.clearance_m == pytest.approx(0.15, abs=res)
+    assert near.pose == (2.5, 2.0, 0.0)
+    assert field.closest([(2.8, 2.0, 0.0)]).clearance_m == 0.0
+    assert field.closest([]) is None
