@@ -307,3 +307,39 @@ def test_a_kept_route_that_no_longer_fits_at_its_own_headings_is_kept_with_new_o
     wall = (again.path[:, 1] > 3.3) & (again.path[:, 1] < 4.7)
     assert np.all(np.abs(np.mod(again.headings[wall], math.pi) - math.pi / 2) < math.radians(15))
     assert _lethal_contacts(cm, again.path, again.headings) == 0
+
+
+def _straight_channel(cm: Costmap) -> Costmap:
+    """The same world seen from afar through a noisy map: the dogleg looks like a straight 0.85 m channel
+    (wide enough for the body held lengthwise)."""
+    g = np.where(cm.static == LETHAL, 100, 0).astype(np.int8)
+    g[_cells(3.25):_cells(4.75), _cells(3.75):_cells(4.60)] = 0
+    out = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT))
+    out.set_static_map(GridMap(g, RES))
+    return out
+
+
+def test_a_gap_found_too_narrow_stays_avoided_until_the_robot_is_back_near_it() -> None:
+    close = _world(slot=True)            # first-hand view: the dogleg is too narrow for the body
+    near = (4.0, 2.2, math.pi / 2)
+    gp = GlobalPlanner(PlannerConfig())
+    fap = FootprintAwarePlanner(gp, FOOTPRINT)
+    first = fap.refine(close, near, GOAL, gp.plan(close, near[:2], GOAL))
+    assert first.path[:, 0].min() < 2.0  # the slot route
+    (sx, sy, seen_from), = fap.tight_spots
+    assert abs(sx - 4.0) < 0.2, fap.tight_spots   # where the body meets the wall below the dogleg
+    assert 2.7 < sy < 3.3, fap.tight_spots
+    far = _straight_channel(close)
+    # from the start, farther from the spot than it was judged from, the channel looks open ...
+    assert math.hypot(START[0] - sx, START[1] - sy) > seen_from + 0.5
+    straight = gp.plan(far, START[:2], GOAL)
+    fresh = FootprintAwarePlanner(gp, FOOTPRINT)
+    assert fresh.refine(far, START, GOAL, straight) is straight    # without the memory: into the channel
+    # ... but the remembered spot keeps the robot on the slot route
+    kept = fap.refine(far, START, GOAL, straight)
+    assert kept is not straight
+    assert kept.path[:, 0].min() < 2.0
+    assert fap.stats.tight_spots == 1
+    # back near the spot the map is first-hand again and decides (here: the channel is open)
+    assert fap.refine(far, near, GOAL, gp.plan(far, near[:2], GOAL)).path[:, 0].min() > 3.0
+    assert fap.tight_spots == ()
