@@ -58,6 +58,8 @@ def test_navigator_pause_mapping_sigkill_without_restart_fails_naming_it(tmp_pat
             signal_pid(boot.pids()["mapping"], signal.SIGKILL)
             wait_until(lambda: _paused(rec, t0), 10, lambda: f"a pause: {rec.latest()}")
             state, detail = boot.wait_terminal(run_id, 60)
+            # the recorder polls the status on its own thread: let it see the end too before it stops
+            wait_until(lambda: any(s.state == state for s in list(rec.samples)), 10, f"the recorder to see {state}")
         finally:
             rec.stop()
         assert state == "FAILED", detail
