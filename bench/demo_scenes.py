@@ -107,7 +107,7 @@ def reduce_summary(s: dict[str, Any]) -> dict[str, Any]:
         "contacts": sum(int(g.get("collision_count", 0)) for g in goals),
         "touched": touched,
         "demo_wall_s": s.get("wall_s"),
-        # the true body's closest approach to the true obstacles over the demo (rbnx/demo/clearance.py)
+        # the true body's closest approach to the true obstacles over the demo (robonix_eval/clearance.py)
         "min_clearance_m": min((g["closest"]["clearance_m"] for g in goals if g.get("closest")), default=None),
         "sim_s": round(sum(g.get("duration_sim_s") or 0.0 for g in goals), 1),
         "outcomes": [{"name": g.get("name"), "state": g.get("state"), "contacts": g.get("collision_count", 0),

@@ -50,6 +50,7 @@ def run_scene(scene: str, n: int, seed: int, lidar: LidarNoise | None = None, co
         "path_ratio_max": max(ratios) if ratios else math.nan,
         "plan_ms_median": 1e3 * statistics.median(plans) if plans else math.nan,
         "recoveries": sum(r.recoveries for r in results),
+        "closest_m_min": min((r.closest_m for r in results), default=math.nan),
         "sim_s": pipe.time, "wall_s": wall, "real_time_factor": pipe.time / wall,
         "results": [r.to_dict() for r in results],
     }
@@ -77,15 +78,17 @@ def run_hard(seed: int) -> list[dict]:
 
         pipe.hooks.append(drop_box)
         out.append(_hard_row(f"0.8 m gap ({side} box), noise {std} m", pipe.run_goals([(14.5, 6.0, 0.0)])))
-    print(f"{'hard scenario':<44} {'succ':>5} {'coll':>4} {'rec':>3}")
+    print(f"{'hard scenario':<44} {'succ':>5} {'coll':>4} {'rec':>3} {'closest cm':>10}")
     for r in out:
-        print(f"{r['scenario']:<44} {r['succeeded']:>2}/{r['goals']:<2} {r['collisions']:>4} {r['recoveries']:>3}")
+        print(f"{r['scenario']:<44} {r['succeeded']:>2}/{r['goals']:<2} {r['collisions']:>4} {r['recoveries']:>3} "
+              f"{100 * r['closest_m_min']:>10.1f}")
     return out
 
 
 def _hard_row(name: str, res: list[GoalResult]) -> dict:
     return {"scenario": name, "goals": len(res), "succeeded": sum(r.succeeded for r in res),
             "collisions": sum(r.collisions for r in res), "recoveries": sum(r.recoveries for r in res),
+            "closest_m_min": min((r.closest_m for r in res), default=math.nan),
             "results": [r.to_dict() for r in res]}
 
 
@@ -99,16 +102,18 @@ def _table(rows: list[dict]) -> dict:
                "path_ratio_median": statistics.median(
                    [x["path_ratio"] for r in rows for x in r["results"]
                     if x["succeeded"] and math.isfinite(x["path_ratio"])] or [math.nan]),
-               "plan_ms_median": statistics.median(r["plan_ms_median"] for r in rows)}
+               "plan_ms_median": statistics.median(r["plan_ms_median"] for r in rows),
+               "closest_m_min": min(r["closest_m_min"] for r in rows)}
     print(f"{'scene':<10} {'succ':>6} {'coll':>4} {'in tol':>6} {'t med s':>7} {'path/short':>10} "
-          f"{'max':>5} {'plan ms':>7} {'rec':>3} {'x RT':>5}")
+          f"{'max':>5} {'plan ms':>7} {'rec':>3} {'x RT':>5} {'closest cm':>10}")
     for r in rows:
         print(f"{r['scene']:<10} {r['succeeded']:>3}/{r['goals']:<2} {r['collisions']:>4} {r['within_tolerance']:>6} "
               f"{r['time_s_median']:>7.1f} {r['path_ratio_median']:>10.2f} {r['path_ratio_max']:>5.2f} "
-              f"{r['plan_ms_median']:>7.1f} {r['recoveries']:>3} {r['real_time_factor']:>5.1f}")
+              f"{r['plan_ms_median']:>7.1f} {r['recoveries']:>3} {r['real_time_factor']:>5.1f} "
+              f"{100 * r['closest_m_min']:>10.1f}")
     print(f"{'overall':<10} {overall['succeeded']:>3}/{n:<2} {overall['collisions']:>4} {'':>6} {'':>7} "
           f"{overall['path_ratio_median']:>10.2f} {'':>5} {overall['plan_ms_median']:>7.1f} "
-          f"{overall['recoveries']:>3}")
+          f"{overall['recoveries']:>3} {'':>5} {100 * overall['closest_m_min']:>10.1f}")
     return {"overall": overall, "scenes": rows}
 
 

@@ -29,6 +29,8 @@ from robonix_common.grid import GridMap
 from robonix_common.scan import Scan
 from slam_service.core import SlamConfig, SlamEngine
 
+from .clearance import RESOLUTION_M as CLEARANCE_RESOLUTION
+from .clearance import ClearanceField
 from .metrics import ShortestPaths, yaw_error
 
 MapSource = Literal["slam", "ground_truth"]
@@ -73,6 +75,7 @@ class GoalResult:
     recoveries: int
     plan_times: list[float] = field(default_factory=list)  # wall s per planner call (informative only)
     final_speed: float = 0.0  # m/s ground truth after settling
+    closest_m: float = math.nan  # the true footprint's closest approach to the true obstacles while driving (m)
 
     @property
     def reached(self) -> bool:
@@ -138,6 +141,7 @@ class Pipeline:
         self._gt_grid: GridMap | None = None
         self._shortest: ShortestPaths | None = None
         self._gt_version = -1
+        self._clearance: tuple[int, ClearanceField] | None = None   # (obstacle count, field) for closest_m
         self.hooks: list[Callable[[Pipeline], None]] = []  # called after every control tick
 
     # ---------------------------------------------------------------- plumbing
@@ -260,8 +264,10 @@ class Pipeline:
         t0, d0, n_plan = self.time, self.driven, len(self.plan_times)
         n_col = len(self.sim.collisions())
         rec = self.nav.navigate(x, y, yaw, t0)
+        track = [start]
         while rec.state not in TERMINAL and self.time - t0 < budget:
             self.step()
+            track.append(self.ground_truth_pose())
         state, detail = rec.state, rec.detail
         if state not in TERMINAL:
             self.nav.cancel(self.time, rec.run_id)
@@ -276,7 +282,17 @@ class Pipeline:
             path_length=self.driven - d0, shortest_length=shortest, final_error_xy=exy, final_error_yaw=eyaw,
             within_tolerance=exy <= gc.xy_goal_tolerance and eyaw <= gc.yaw_goal_tolerance,
             collisions=len(self.sim.collisions()) - n_col, recoveries=rec.recoveries,
-            plan_times=self.plan_times[n_plan:], final_speed=math.hypot(vx, vy))
+            plan_times=self.plan_times[n_plan:], final_speed=math.hypot(vx, vy),
+            closest_m=self._closest_approach(track))
+
+    def _closest_approach(self, track: Sequence[Pose2D]) -> float:
+        """The smallest clearance of the true footprint to the true obstacles over ``track`` (m)."""
+        version = len(self.sim.scene_info()["obstacles"])
+        if self._clearance is None or self._clearance[0] != version:
+            grid = self.sim.ground_truth_grid(CLEARANCE_RESOLUTION, overlap=False)
+            self._clearance = (version, ClearanceField.from_grid(grid, self.robot.footprint))
+        closest = self._clearance[1].closest(track)
+        return closest.clearance_m if closest is not None else math.nan
 
     def run_goals(self, goals: Sequence[Sequence[float]], warmup: float = 0.5) -> list[GoalResult]:
         """Goals in sequence from wherever the previous one left the robot (the map keeps growing)."""

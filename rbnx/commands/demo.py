@@ -272,7 +272,7 @@ def run(args: argparse.Namespace) -> int:
 def _clearance_field(scene: str, sim_name: str | None, rec: Recorder) -> Any:
     """The ground-truth clearance field for the scene the simulator loaded, or None (with a warning) when it
     cannot be built here or names another scene: the closest-approach figures are then left out."""
-    from rbnx.demo.clearance import ClearanceField
+    from robonix_eval.clearance import ClearanceField
 
     try:
         field = ClearanceField.for_scene(scene)

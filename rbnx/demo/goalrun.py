@@ -10,11 +10,11 @@ import time
 from typing import Any
 
 from rbnx.demo.boot import BootChild, DemoError
-from rbnx.demo.clearance import ClearanceField
 from rbnx.demo.goals import TERMINAL, fmt_s, parse_detail, path_length
 from rbnx.demo.record import Recorder
 from rbnx.demo.report import GoalResult, LiveLine
 from rbnx.demo.rpc import DemoRpc
+from robonix_eval.clearance import ClearanceField
 
 POLL_S = 0.3
 MAX_NAV_EVENTS = 60

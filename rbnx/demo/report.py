@@ -74,7 +74,7 @@ class GoalResult:
     # nav status changes seen while driving (sim time, state, detail), numbers aside: what navigation was doing
     # (following, blocked, which recovery) when a contact happened; each contact gets the entry then in force
     nav_events: list[dict[str, Any]] = field(default_factory=list)
-    # the true footprint's closest approach to the true obstacles while driving (rbnx/demo/clearance.py)
+    # the true footprint's closest approach to the true obstacles while driving (robonix_eval/clearance.py)
     closest: dict[str, float] | None = None
     plan: Any = field(default=None, repr=False, compare=False)  # (N, 2) map-frame route, for map.png only
 

@@ -96,7 +96,7 @@ def test_clearance_is_the_footprint_outline_distance_to_the_nearest_obstacle() -
     cell), 0 once it overlaps, and the closest pose of a stretch is the one reported."""
     import numpy as np
 
-    from rbnx.demo.clearance import ClearanceField
+    from robonix_eval.clearance import ClearanceField
 
     res = 0.02
     occ = np.zeros((200, 200), dtype=bool)          # 4 x 4 m from (0, 0); a wall filling x >= 3 m

@@ -1,10 +1,10 @@
-"""`rbnx demo`: how close the robot's body came to the scene's obstacles, from the simulator's ground truth.
+"""How close the robot's body came to the scene's obstacles, from the simulator's ground truth.
 
 A contact is binary and rare, so a run without one says little about how much room was left; the
-closest approach of the true footprint to the true obstacles does. It is measured here from the dense
-ground-truth poses the demo records and the scene the simulator loaded (same name, same seed), on a
-2 cm raster: the distance of each footprint outline point to the nearest occupied cell, 0 for a point
-inside one. Accuracy about one cell.
+closest approach of the true footprint to the true obstacles does. It is measured from dense ground-truth
+poses (`rbnx demo` records them from the HAL's ground-truth topic, the in-process pipeline at every control
+tick) against the scene the simulator loaded, on a 2 cm raster: the distance of each footprint outline
+point to the nearest occupied cell, 0 for a point inside one. Accuracy about one cell.
 """
 
 from __future__ import annotations
@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
+from robonix_common.grid import GridMap
 
 RESOLUTION_M = 0.02
 
@@ -57,7 +59,13 @@ class ClearanceField:
         pad = 1.0
         grid = rasterize(scene.obstacles(), (xmin - pad, ymin - pad, xmax + pad, ymax + pad), resolution,
                          overlap=False)
-        return cls(grid.data >= 100, (xmin - pad, ymin - pad), resolution, robot.footprint, scene.name)
+        return cls.from_grid(grid, robot.footprint, scene.name)
+
+    @classmethod
+    def from_grid(cls, grid: GridMap, footprint: Sequence[Sequence[float]], scene_name: str = "") -> ClearanceField:
+        """The field over an occupancy raster (occupied = 100) of the true obstacles, e.g. the simulator's
+        ``ground_truth_grid(RESOLUTION_M, overlap=False)``."""
+        return cls(grid.data >= 100, (grid.origin_x, grid.origin_y), grid.resolution, footprint, scene_name)
 
     def closest(self, poses: Sequence[Sequence[float]]) -> Closest | None:
         """The smallest outline clearance over ``poses`` (x, y, yaw); None for no poses."""
