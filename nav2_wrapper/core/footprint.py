@@ -48,6 +48,19 @@ class Footprint:
     def to_string(self) -> str:
         return "[" + ", ".join(f"[{x:g}, {y:g}]" for x, y in self.polygon) + "]"
 
+    def padded(self, margin: float) -> Footprint:
+        """The polygon grown outward by ``margin`` (each edge moved out along its normal, corners mitred), as
+        Nav2's ``footprint_padding`` does; exact for the rectangle, a slight over-growth at sharp corners."""
+        p = self.polygon
+        area2 = float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1]))
+        e_next = np.roll(p, -1, axis=0) - p
+        normals = np.column_stack([e_next[:, 1], -e_next[:, 0]]) / np.hypot(*e_next.T)[:, None]
+        if area2 < 0:          # clockwise: outward is the other side
+            normals = -normals
+        n_prev = np.roll(normals, 1, axis=0)
+        denom = 1.0 + np.sum(normals * n_prev, axis=1)
+        return Footprint(p + margin * (normals + n_prev) / np.maximum(denom, 1e-6)[:, None])
+
     def outline_points(self, spacing: float) -> NDArray[np.float64]:
         """Points along the polygon edges (≤ spacing apart) plus the origin: what a collision check samples."""
         pts = [np.zeros((1, 2))]

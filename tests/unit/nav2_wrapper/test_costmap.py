@@ -26,6 +26,25 @@ def _single_obstacle(k=3.0, radius=1.0):
     return cm
 
 
+@pytest.mark.parametrize("order", [1, -1])
+def test_padded_footprint_moves_every_edge_out_by_the_margin(order: int) -> None:
+    from nav2_wrapper.core.footprint import Footprint
+
+    rect = np.array([[0.35, 0.25], [-0.35, 0.25], [-0.35, -0.25], [0.35, -0.25]])[::order]
+    grown = Footprint(rect).padded(0.05)
+    assert np.allclose(np.abs(grown.polygon), [[0.40, 0.30]] * 4)
+    assert grown.inscribed_radius == pytest.approx(0.30)
+    # a pentagon: every edge of the grown one lies 0.05 m outside the matching edge of the original
+    pent = Footprint(np.array([[0.4, 0.0], [0.1, 0.3], [-0.3, 0.2], [-0.3, -0.2], [0.1, -0.3]])[::order])
+    big = pent.padded(0.05)
+    for i in range(5):
+        a, b = pent.polygon[i], pent.polygon[(i + 1) % 5]
+        n = np.array([b[1] - a[1], a[0] - b[0]]) / math.hypot(*(b - a))
+        n *= np.sign(np.dot(n, a - pent.polygon.mean(axis=0)))   # outward
+        assert np.dot(big.polygon[i] - a, n) == pytest.approx(0.05)
+        assert np.dot(big.polygon[(i + 1) % 5] - b, n) == pytest.approx(0.05)
+
+
 @pytest.mark.parametrize("cells", [6, 8, 10, 14, 19])
 def test_inflation_matches_nav2_formula(cells):
     cm = _single_obstacle()

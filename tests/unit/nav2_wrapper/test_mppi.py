@@ -103,3 +103,54 @@ def test_speed_limit_caps_the_commands(limit: float) -> None:
     _, cmds = _drive(ctl, cm, (1.0, 3.0, 0.0), (7.0, 3.0, 0.0), steps=80)
     cap = 0.5 * limit / 100.0
     assert max(math.hypot(c[0], c[1]) for c in cmds) <= math.sqrt(2) * cap + 1e-9
+
+
+def _doorway_costmap(gap: float) -> tuple[Costmap, np.ndarray]:
+    """A wall across x = 4 m with a ``gap`` m opening centred on y = 3 m."""
+    grid = np.zeros((120, 160), np.int8)
+    grid[0, :] = grid[-1, :] = 100
+    grid[:, 0] = grid[:, -1] = 100
+    c = int(4.0 / RES)
+    grid[:, c:c + 2] = 100
+    grid[int((3.0 - gap / 2) / RES):int((3.0 + gap / 2) / RES), c:c + 2] = 0
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FOOTPRINT, inflation_radius=0.55,
+                               cost_scaling_factor=3.0))
+    cm.set_static_map(GridMap(grid, RES))
+    return cm, grid
+
+
+def _body_clearance(grid: np.ndarray, poses: list[tuple[float, float, float]]) -> float:
+    """The footprint outline's smallest distance (m) to an occupied cell over ``poses``, on a 1 cm raster."""
+    from scipy.ndimage import distance_transform_edt
+
+    k = 5
+    occ = np.kron(grid >= 100, np.ones((k, k), bool))
+    dist = distance_transform_edt(~occ) * (RES / k)
+    pts = FOOTPRINT.outline_points(0.02)
+    p = np.asarray(poses)
+    c, s = np.cos(p[:, 2:3]), np.sin(p[:, 2:3])
+    px = p[:, 0:1] + c * pts[None, :, 0] - s * pts[None, :, 1]
+    py = p[:, 1:2] + s * pts[None, :, 0] + c * pts[None, :, 1]
+    col = np.clip((px / (RES / k)).astype(int), 0, dist.shape[1] - 1)
+    row = np.clip((py / (RES / k)).astype(int), 0, dist.shape[0] - 1)
+    return float(dist[row, col].min())
+
+
+@pytest.mark.parametrize("start", [(1.5, 1.2, 0.6), (1.5, 4.8, -0.6)])
+def test_keeps_body_clearance_entering_a_doorway_at_an_angle(start: tuple[float, float, float]) -> None:
+    # a 0.8 m opening entered along a path that bends into it: the centre's cost is the same for a body lined up
+    # with the opening and one still turned toward the approach, the corners are not; the clearance critic
+    # keeps them off the jambs (without it the corner passes within about a centimetre)
+    from nav2_wrapper.core.planner import densify
+
+    cm, grid = _doorway_costmap(0.8)
+    path = densify(np.array([start[:2], (3.4, 3.0), (4.6, 3.0), (7.0, 3.0)]), 0.05)
+    clear = {}
+    for weight in (0.0, MppiConfig().clearance_weight):
+        ctl = MppiController(ControllerConfig(footprint=FOOTPRINT), MppiConfig(clearance_weight=weight))
+        ctl.set_path(path)
+        poses, _ = _drive(ctl, cm, start, (7.0, 3.0, 0.0), steps=600)
+        assert math.hypot(poses[-1][0] - 7.0, poses[-1][1] - 3.0) < 0.15
+        clear[weight] = _body_clearance(grid, poses)
+    assert clear[MppiConfig().clearance_weight] >= 0.04
+    assert clear[MppiConfig().clearance_weight] > clear[0.0] + 0.02
