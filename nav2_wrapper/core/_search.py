@@ -177,31 +177,38 @@ def _key(g, h, inv, cb, mask):
 
 
 @njit(cache=True, inline="always")
-def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
-    """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better, appending it to the
-    bucket of its f (the heuristic is only computed then: most relaxations fail). Returns that bucket's new
-    length, 0 if nothing was appended. The caller guarantees room in the bucket."""
+def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask):
+    """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better. Returns the ring slot
+    of the bucket it is to be appended to (``_file``), -1 if none (the heuristic is only computed when the g
+    improves: most relaxations fail). Takes no bucket arrays: numba kept reference counting the ones passed
+    into this branchy function on every call."""
     st = rec[2 * nb]
     if st >= seen:                  # seen or closed in this plan
         old = np.float64(recg[2 * nb + 1])
         if not ng < old:
-            return 0
+            return -1
         rec[2 * nb] = seen
         recg[2 * nb + 1] = ng
         dirs[nb] = k
         h = h_scale * _octile(nr, nc, gr, gc)
         key = _key(ng, h, inv, cb, mask)
         if st == seen and _key(old, h, inv, cb, mask) == key:
-            return 0                # its open entry is already in that bucket and reads the new g when popped
-    else:
-        rec[2 * nb] = seen
-        recg[2 * nb + 1] = ng
-        dirs[nb] = k
-        key = _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
-    n = counts[key]
-    buckets[key, n] = nb
-    counts[key] = n + 1
-    return n + 1
+            return -1               # its open entry is already in that bucket and reads the new g when popped
+        return key
+    rec[2 * nb] = seen
+    recg[2 * nb + 1] = ng
+    dirs[nb] = k
+    return _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
+
+
+@njit(cache=True, inline="always")
+def _file(buckets, counts, key, nb):
+    """Append cell ``nb`` to the bucket in ring slot ``key``; returns that bucket's new length. The caller
+    guarantees room."""
+    n = counts[key] + 1
+    buckets[key, n - 1] = nb
+    counts[key] = n
+    return n
 
 
 @njit(cache=True, inline="always")
@@ -314,6 +321,12 @@ def _behind_masks(drs, dcs):
     return behind
 
 
+# _expand's outcomes
+_FOUND = 1
+_EXHAUSTED = 0
+_NEED_ROOM = -1
+
+
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
@@ -343,7 +356,6 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     reachable from the start is closed.
     """
     rows, cols = costs.shape
-    flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
@@ -354,20 +366,46 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     counts = np.zeros(nbuckets, np.int64)
     rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    fullest = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
-    pending = 1
-    far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
+    key = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
+    fullest = _file(buckets, counts, key, start)
+    # the loop's state between calls of _expand: current bucket, open entries, fullest bucket, expansions
+    state = np.array([cb, 1, fullest, 0], np.int64)
     # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
     drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
     dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
-    offs = drs * cols + dcs
-    fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
-    behind = _behind_masks(drs, dcs)
     sides, mids = _side_moves(drs, dcs)
-    expansions = 0
+    moves = (drs, dcs, drs * cols + dcs, _behind_masks(drs, dcs), sides, mids)
+    fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
+    while True:
+        status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_cost, h_scale,
+                         delta, start, buckets, counts, state, moves, fo)
+        if status != _NEED_ROOM:
+            return status == _FOUND, state[3]
+        buckets = _room(buckets, state[2] + 8)
+
+
+@njit(cache=True)
+def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_cost, h_scale, delta, start, buckets,
+            counts, state, moves, fo):
+    """The expansion loop of ``astar_buckets`` from ``state``; returns _FOUND, _EXHAUSTED or, before a pop that
+    could overflow a bucket, _NEED_ROOM (state saved: the caller grows ``buckets`` and calls again). A separate
+    function that creates no array and reassigns none: an array made or regrown in the loop's function is
+    reference-counted by numba on every relaxation that passes it to a helper (an atomic add and a call each,
+    12 % of the search time)."""
+    drs, dcs, offs, behind, sides, mids = moves
+    sr, sc = start // cols, start % cols
+    gr, gc = goal // cols, goal % cols
+    inv = 1.0 / delta
+    mask = buckets.shape[0] - 1
+    room = buckets.shape[1] - 8
+    cb, pending, fullest, expansions = state[0], state[1], state[2], state[3]
+    far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
     while pending > 0:
         b = cb & mask
         while counts[b] > 0:
+            if fullest > room:
+                state[0], state[1], state[2], state[3] = cb, pending, fullest, expansions
+                return _NEED_ROOM
             counts[b] -= 1              # last in, first out: see the docstring
             cur = buckets[b, counts[b]]
             pending -= 1
@@ -377,7 +415,6 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
             if not _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc)):
                 continue
             expansions += 1
-            buckets = _room(buckets, fullest + 8)
             if _interior(r, c, rows, cols, sr, sc, far):
                 for k in range(4):
                     fo[k] = table[flat[cur + offs[k]]]
@@ -393,26 +430,42 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
                         f = SQRT2 * table[flat[cur + offs[k]]]
                     if f == np.inf:
                         continue
-                    n = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
-                               h_scale, inv, cb, mask, buckets, counts)
-                    pending += n > 0
-                    fullest = max(fullest, n)
+                    key = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
+                                 h_scale, inv, cb, mask)
+                    if key >= 0:
+                        fullest = max(fullest, _file(buckets, counts, key, cur + offs[k]))
+                        pending += 1
             else:
-                for k in range(8):
-                    nr, nc = r + drs[k], c + dcs[k]
-                    if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
-                        continue
-                    f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-                    if f == np.inf:
-                        continue
-                    n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb,
-                               mask, buckets, counts)
-                    pending += n > 0
-                    fullest = max(fullest, n)
+                added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, sr, sc, gr, gc,
+                                             esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)
+                pending += added
+                fullest = max(fullest, most)
         if _past_goal(rec, recg, seen, goal, (cb + 1) * delta):     # every open f >= the next bucket's edge
-            return True, expansions
+            state[3] = expansions
+            return _FOUND
         cb += 1
-    return False, expansions
+    state[3] = expansions
+    return _EXHAUSTED
+
+
+@njit(cache=True)
+def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, sr, sc, gr, gc, esc_r2, esc_cost,
+                   h_scale, inv, cb, mask, buckets, counts, drs, dcs):
+    """Expand a cell on the map edge or near the start (the escape disc): bounds-checked, ``_move_cost``'s full
+    rules, no pruning. Returns (entries filed, the longest bucket after filing)."""
+    added = most = 0
+    for k in range(8):
+        nr, nc = r + drs[k], c + dcs[k]
+        if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
+            continue
+        f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+        if f == np.inf:
+            continue
+        key = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
+        if key >= 0:
+            most = max(most, _file(buckets, counts, key, nr * cols + nc))
+            added += 1
+    return added, most
 
 
 @njit(cache=True)
