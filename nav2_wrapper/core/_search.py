@@ -171,6 +171,13 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
 
 
 @njit(cache=True, inline="always")
+def _u(i):
+    """An index as unsigned: numba then skips the negative-index wraparound it adds to every signed index (a
+    shift, an and, and the dimension kept in a register or reloaded from the stack, at each array access)."""
+    return np.uint64(i)
+
+
+@njit(cache=True, inline="always")
 def _key(g, h, inv, cb, mask):
     """Ring slot of f = g + h (never below the current bucket: float rounding only)."""
     return max(int((g + h) * inv), cb) & mask
@@ -182,22 +189,22 @@ def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, m
     of the bucket it is to be appended to (``_file``), -1 if none (the heuristic is only computed when the g
     improves: most relaxations fail). Takes no bucket arrays: numba kept reference counting the ones passed
     into this branchy function on every call."""
-    st = rec[2 * nb]
+    st = rec[_u(2 * nb)]
     if st >= seen:                  # seen or closed in this plan
-        old = np.float64(recg[2 * nb + 1])
+        old = np.float64(recg[_u(2 * nb + 1)])
         if not ng < old:
             return -1
-        rec[2 * nb] = seen
-        recg[2 * nb + 1] = ng
-        dirs[nb] = k
+        rec[_u(2 * nb)] = seen
+        recg[_u(2 * nb + 1)] = ng
+        dirs[_u(nb)] = k
         h = h_scale * _octile(nr, nc, gr, gc)
         key = _key(ng, h, inv, cb, mask)
         if st == seen and _key(old, h, inv, cb, mask) == key:
             return -1               # its open entry is already in that bucket and reads the new g when popped
         return key
-    rec[2 * nb] = seen
-    recg[2 * nb + 1] = ng
-    dirs[nb] = k
+    rec[_u(2 * nb)] = seen
+    recg[_u(2 * nb + 1)] = ng
+    dirs[_u(nb)] = k
     return _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
 
 
@@ -205,9 +212,9 @@ def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, m
 def _file(buckets, counts, key, nb):
     """Append cell ``nb`` to the bucket in ring slot ``key``; returns that bucket's new length. The caller
     guarantees room."""
-    n = counts[key] + 1
-    buckets[key, n - 1] = nb
-    counts[key] = n
+    n = counts[_u(key)] + 1
+    buckets[_u(key), _u(n - 1)] = nb
+    counts[_u(key)] = n
     return n
 
 
@@ -223,16 +230,16 @@ def _close(rec, recg, cur, seen, goal, f):
     (closed already at this g) and for a cell that cannot lead to a cheaper goal than the one found
     (``_past_goal``): that one is closed unexpanded, so a better g found later re-files it like any closed
     cell."""
-    if rec[2 * cur] != seen:
+    if rec[_u(2 * cur)] != seen:
         return False
-    rec[2 * cur] = seen + 1
+    rec[_u(2 * cur)] = seen + 1
     return not _past_goal(rec, recg, seen, goal, f)
 
 
 @njit(cache=True, inline="always")
 def _past_goal(rec, recg, seen, goal, f):
     """True when the goal already has a g in this plan and ``f`` is not below it (within UB_TOL)."""
-    return rec[2 * goal] >= seen and f >= np.float64(recg[2 * goal + 1]) * (1.0 - UB_TOL)
+    return rec[_u(2 * goal)] >= seen and f >= np.float64(recg[_u(2 * goal + 1)]) * (1.0 - UB_TOL)
 
 
 @njit(cache=True, inline="always")
@@ -291,18 +298,18 @@ def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
     skip = behind[d]
     if d == 8:
         return skip
-    wc = table[flat[cur]]
+    wc = table[flat[_u(cur)]]
     for j in range(2):
         k = sides[d, j]
         if d < 4:
             if SQRT2 * fo[k] < wc + fo[k]:
                 skip |= 1 << k
             k = sides[d, 2 + j]
-            wn = table[flat[cur + offs[k]]]
+            wn = table[flat[_u(cur + offs[k])]]
             if SQRT2 * fo[mids[d, 2 + j]] + wn <= wc + SQRT2 * wn:
                 skip |= 1 << k
         else:
-            wn = table[flat[cur + offs[k]]]
+            wn = table[flat[_u(cur + offs[k])]]
             if fo[mids[d, j]] + wn < SQRT2 * (wc + wn):
                 skip |= 1 << k
     return skip
@@ -407,18 +414,18 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
                 state[0], state[1], state[2], state[3] = cb, pending, fullest, expansions
                 return _NEED_ROOM
             counts[b] -= 1              # last in, first out: see the docstring
-            cur = buckets[b, counts[b]]
+            cur = buckets[_u(b), _u(counts[b])]
             pending -= 1
             r = cur // cols
             c = cur - r * cols
-            gcur = np.float64(recg[2 * cur + 1])
+            gcur = np.float64(recg[_u(2 * cur + 1)])
             if not _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc)):
                 continue
             expansions += 1
             if _interior(r, c, rows, cols, sr, sc, far):
                 for k in range(4):
-                    fo[k] = table[flat[cur + offs[k]]]
-                skip = _prune(dirs[cur], behind, sides, mids, fo, table, flat, cur, offs)
+                    fo[k] = table[flat[_u(cur + offs[k])]]
+                skip = _prune(dirs[_u(cur)], behind, sides, mids, fo, table, flat, cur, offs)
                 for k in range(8):
                     if (skip >> k) & 1:
                         continue
@@ -427,7 +434,7 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
                     elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
                         continue    # no squeeze between two blocked orthogonal cells
                     else:
-                        f = SQRT2 * table[flat[cur + offs[k]]]
+                        f = SQRT2 * table[flat[_u(cur + offs[k])]]
                     if f == np.inf:
                         continue
                     key = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
