@@ -423,24 +423,27 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
                 continue
             expansions += 1
             if _interior(r, c, rows, cols, sr, sc, far):
-                for k in range(4):
-                    fo[k] = table[flat[_u(cur + offs[k])]]
+                fo[0] = table[flat[_u(cur - cols)]]
+                fo[1] = table[flat[_u(cur + cols)]]
+                fo[2] = table[flat[_u(cur - 1)]]
+                fo[3] = table[flat[_u(cur + 1)]]
                 skip = _prune(dirs[_u(cur)], behind, sides, mids, fo, table, flat, cur, offs)
                 for k in range(8):
                     if (skip >> k) & 1:
                         continue
+                    nr, nc = _neighbour(r, c, k)     # k is a constant in the unrolled loop: no table loads
+                    nb = cur + (nr - r) * cols + (nc - c)
                     if k < 4:
                         f = fo[k]
                     elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
                         continue    # no squeeze between two blocked orthogonal cells
                     else:
-                        f = SQRT2 * table[flat[_u(cur + offs[k])]]
+                        f = SQRT2 * table[flat[_u(nb)]]
                     if f == np.inf:
                         continue
-                    key = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
-                                 h_scale, inv, cb, mask)
+                    key = _relax(rec, recg, dirs, k, nb, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
                     if key >= 0:
-                        fullest = max(fullest, _file(buckets, counts, key, cur + offs[k]))
+                        fullest = max(fullest, _file(buckets, counts, key, nb))
                         pending += 1
             else:
                 added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, sr, sc, gr, gc,
