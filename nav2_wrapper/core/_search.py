@@ -5,8 +5,9 @@ Kept apart from planner.py so the Python-level logic stays readable; compiled wi
 the first process on a machine pays the compile time.
 
 Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation reads and
-writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is 2·stamp
-(seen) or 2·stamp+1 (closed) for the plan with that stamp, so the buffer is reused between plans without
+writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is
+32·stamp + 2·move + closed for the plan with that stamp (``STATE_SHIFT``; move 0-7 is the move that last gave
+the cell its g, 8 none, which the bucket kernel's pruning reads), so the buffer is reused between plans without
 clearing. No parent array: ``backtrack`` walks the g values back. The open list is a 4-ary heap of single
 int64 entries (f as float32 bits above the cell index): a heap move is one 8-byte copy, and a pop sifts
 down half as many levels as in a binary heap.
@@ -20,6 +21,7 @@ import numpy as np
 from numba import njit
 
 SQRT2 = math.sqrt(2.0)
+STATE_SHIFT = 5     # a record state word: stamp << STATE_SHIFT | move << 1 | closed, move 0-8 (see the module doc)
 STRAIGHT_TOL = 2e-7   # relative: a step within this of the cheapest counts as tying with it (float32 g)
 TIE_EPS = 1e-6
 UB_TOL = 1e-6   # relative: a cell whose f is within this of the goal's g found so far is not expanded
@@ -132,7 +134,7 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
     heap = np.empty(1 << 14, np.int64)
-    seen = 2 * stamp
+    seen = stamp << STATE_SHIFT        # seen, move 0: this kernel does not prune by move
     done = seen + 1
     hw = h_weight * h_scale * (1.0 + TIE_EPS)
     recg[2 * start + 1] = 0.0
@@ -184,7 +186,7 @@ def _key(g, h, inv, cb, mask):
 
 
 @njit(cache=True, inline="always")
-def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask):
+def _relax(rec, recg, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask):
     """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better. Returns the ring slot
     of the bucket it is to be appended to (``_file``), -1 if none (the heuristic is only computed when the g
     improves: most relaxations fail). Takes no bucket arrays: numba kept reference counting the ones passed
@@ -194,17 +196,15 @@ def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, m
         old = np.float64(recg[_u(2 * nb + 1)])
         if not ng < old:
             return -1
-        rec[_u(2 * nb)] = seen
+        rec[_u(2 * nb)] = seen | (k << 1)
         recg[_u(2 * nb + 1)] = ng
-        dirs[_u(nb)] = k
         h = h_scale * _octile(nr, nc, gr, gc)
         key = _key(ng, h, inv, cb, mask)
-        if st == seen and _key(old, h, inv, cb, mask) == key:
+        if not st & 1 and _key(old, h, inv, cb, mask) == key:
             return -1               # its open entry is already in that bucket and reads the new g when popped
         return key
-    rec[_u(2 * nb)] = seen
+    rec[_u(2 * nb)] = seen | (k << 1)
     recg[_u(2 * nb + 1)] = ng
-    dirs[_u(nb)] = k
     return _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
 
 
@@ -226,14 +226,17 @@ def _interior(r, c, rows, cols, sr, sc, far):
 
 @njit(cache=True, inline="always")
 def _close(rec, recg, cur, seen, goal, f):
-    """Close the popped cell ``cur`` (f = ``f``); True when it is to be expanded. False for a duplicate entry
-    (closed already at this g) and for a cell that cannot lead to a cheaper goal than the one found
-    (``_past_goal``): that one is closed unexpanded, so a better g found later re-files it like any closed
-    cell."""
-    if rec[_u(2 * cur)] != seen:
-        return False
-    rec[_u(2 * cur)] = seen + 1
-    return not _past_goal(rec, recg, seen, goal, f)
+    """Close the popped cell ``cur`` (f = ``f``); returns the move that gave it its g (8: none) when it is to be
+    expanded, -1 if not: for a duplicate entry (closed already at this g) and for a cell that cannot lead to a
+    cheaper goal than the one found (``_past_goal``): that one is closed unexpanded, so a better g found later
+    re-files it like any closed cell."""
+    st = rec[_u(2 * cur)]
+    if st < seen or st & 1:
+        return -1
+    rec[_u(2 * cur)] = st | 1
+    if _past_goal(rec, recg, seen, goal, f):
+        return -1
+    return (st >> 1) & 15
 
 
 @njit(cache=True, inline="always")
@@ -335,7 +338,7 @@ _NEED_ROOM = -1
 
 
 @njit(cache=True)
-def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
+def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
@@ -356,7 +359,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
-    g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
+    g (kept in the cell's state word): the predecessor p and the two cells next to both, which p reaches
     directly by a move costing less than any detour through this cell; nor of the two side neighbours when
     p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
     path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
@@ -366,14 +369,14 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
-    seen = 2 * stamp
+    seen = stamp << STATE_SHIFT
     inv = 1.0 / delta
     mask = nbuckets - 1
     buckets = np.empty((nbuckets, 1024), np.int32)
     counts = np.zeros(nbuckets, np.int64)
-    rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
+    rec[2 * start] = seen - 1      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    key = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
+    key = _relax(rec, recg, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
     fullest = _file(buckets, counts, key, start)
     # the loop's state between calls of _expand: current bucket, open entries, fullest bucket, expansions
     state = np.array([cb, 1, fullest, 0], np.int64)
@@ -384,7 +387,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     moves = (drs, dcs, drs * cols + dcs, _behind_masks(drs, dcs), sides, mids)
     fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
     while True:
-        status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_cost, h_scale,
+        status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale,
                          delta, start, buckets, counts, state, moves, fo)
         if status != _NEED_ROOM:
             return status == _FOUND, state[3]
@@ -392,7 +395,7 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
 
 
 @njit(cache=True)
-def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_cost, h_scale, delta, start, buckets,
+def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta, start, buckets,
             counts, state, moves, fo):
     """The expansion loop of ``astar_buckets`` from ``state``; returns _FOUND, _EXHAUSTED or, before a pop that
     could overflow a bucket, _NEED_ROOM (state saved: the caller grows ``buckets`` and calls again). A separate
@@ -419,7 +422,8 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
             r = cur // cols
             c = cur - r * cols
             gcur = np.float64(recg[_u(2 * cur + 1)])
-            if not _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc)):
+            d = _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc))
+            if d < 0:
                 continue
             expansions += 1
             if _interior(r, c, rows, cols, sr, sc, far):
@@ -427,7 +431,7 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
                 fo[1] = table[flat[_u(cur + cols)]]
                 fo[2] = table[flat[_u(cur - 1)]]
                 fo[3] = table[flat[_u(cur + 1)]]
-                skip = _prune(dirs[_u(cur)], behind, sides, mids, fo, table, flat, cur, offs)
+                skip = _prune(d, behind, sides, mids, fo, table, flat, cur, offs)
                 for k in range(8):
                     if (skip >> k) & 1:
                         continue
@@ -441,12 +445,12 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
                         f = SQRT2 * table[flat[_u(nb)]]
                     if f == np.inf:
                         continue
-                    key = _relax(rec, recg, dirs, k, nb, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
+                    key = _relax(rec, recg, k, nb, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
                     if key >= 0:
                         fullest = max(fullest, _file(buckets, counts, key, nb))
                         pending += 1
             else:
-                added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, sr, sc, gr, gc,
+                added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc,
                                              esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)
                 pending += added
                 fullest = max(fullest, most)
@@ -459,7 +463,7 @@ def _expand(flat, rows, cols, table, goal, rec, recg, dirs, seen, esc_r2, esc_co
 
 
 @njit(cache=True)
-def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, sr, sc, gr, gc, esc_r2, esc_cost,
+def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc, esc_r2, esc_cost,
                    h_scale, inv, cb, mask, buckets, counts, drs, dcs):
     """Expand a cell on the map edge or near the start (the escape disc): bounds-checked, ``_move_cost``'s full
     rules, no pruning. Returns (entries filed, the longest bucket after filing)."""
@@ -471,11 +475,17 @@ def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, dirs, seen, s
         f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
         if f == np.inf:
             continue
-        key = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
+        key = _relax(rec, recg, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
         if key >= 0:
             most = max(most, _file(buckets, counts, key, nr * cols + nc))
             added += 1
     return added, most
+
+
+def closed(rec: np.ndarray, cell: int, stamp: int) -> bool:
+    """Whether the search with ``stamp`` closed ``cell`` (flat index)."""
+    st = int(rec[2 * cell])
+    return st >> STATE_SHIFT == stamp and bool(st & 1)
 
 
 @njit(cache=True)
@@ -491,7 +501,7 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
     flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
-    done = 2 * stamp + 1
+    this = stamp << STATE_SHIFT
     out = np.empty(256, np.int64)
     m = 0
     cur = cell
@@ -516,7 +526,8 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
                 continue
             p = pr * cols + pc
-            if rec[2 * p] != done:
+            st = rec[2 * p]
+            if st < this or not st & 1:    # not closed in this plan
                 continue
             v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
             if v < bestv:
