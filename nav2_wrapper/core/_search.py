@@ -18,7 +18,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 SQRT2 = math.sqrt(2.0)
 STATE_SHIFT = 5     # a record state word: stamp << STATE_SHIFT | move << 1 | closed, move 0-8 (see the module doc)
@@ -170,6 +172,21 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
                 heap = _grow(heap, n)
                 n = _hpush(heap, n, _pack(ng + hw * _octile(nr, nc, gr, gc), nb))
     return False, expansions
+
+
+@intrinsic
+def _prefetch(typingctx, arr, idx):
+    """Hint the cache line holding ``arr[idx]`` toward L1 for writing (LLVM's prefetch: no fault on a bad address,
+    no effect on any value)."""
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        byte = ir.PointerType(ir.IntType(8))
+        fnty = ir.FunctionType(ir.VoidType(), [byte, ir.IntType(32), ir.IntType(32), ir.IntType(32)])
+        fn = builder.module.declare_intrinsic("llvm.prefetch", [byte], fnty)
+        i32 = ir.IntType(32)
+        builder.call(fn, [builder.bitcast(builder.gep(data, [args[1]]), byte), i32(1), i32(3), i32(1)])
+        return context.get_dummy_value()
+    return types.void(arr, idx), codegen
 
 
 @njit(cache=True, inline="always")
@@ -449,6 +466,8 @@ def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_
                     if key >= 0:
                         fullest = max(fullest, _file(buckets, counts, key, nb))
                         pending += 1
+                        # the record straight ahead of nb: nb is often popped next (LIFO) and reads it then
+                        _prefetch(rec, 2 * (2 * nb - cur))
             else:
                 added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc,
                                              esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)
