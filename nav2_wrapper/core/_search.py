@@ -272,82 +272,6 @@ def _room(buckets, need):
     return grown
 
 
-@njit(cache=True)
-def _side_moves(drs, dcs):
-    """Per arrival move a (row 8 = none; -1 where unused), columns 0-1: the two neighbours beside a (dot
-    product 0, same kind of move as a), with for a diagonal a the orthogonal neighbour m through which the
-    predecessor reaches that side cell by two orthogonal moves; columns 2-3, for an orthogonal a: the two
-    forward diagonals, with the side cell s through which the predecessor reaches them diagonal-first."""
-    sides = np.full((9, 4), -1, np.int64)
-    mids = np.full((9, 4), -1, np.int64)
-    for a in range(8):
-        j = 0
-        f = 2
-        for k in range(8):
-            dot = drs[k] * drs[a] + dcs[k] * dcs[a]
-            if (k < 4) == (a < 4) and k != a and dot == 0:
-                sides[a, j] = k
-                if a >= 4:   # m = the side cell minus the component it shares with a
-                    mids[a, j] = _orth_index(drs, dcs, 0 if drs[k] == drs[a] else drs[k],
-                                             0 if dcs[k] == dcs[a] else dcs[k])
-                j += 1
-            elif a < 4 and k >= 4 and dot > 0:
-                sides[a, f] = k
-                mids[a, f] = _orth_index(drs, dcs, drs[k] - drs[a], dcs[k] - dcs[a])
-                f += 1
-    return sides, mids
-
-
-@njit(cache=True, inline="always")
-def _orth_index(drs, dcs, dr, dc):
-    for q in range(4):
-        if drs[q] == dr and dcs[q] == dc:
-            return q
-    return -1
-
-
-@njit(cache=True, inline="always")
-def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
-    """Bit mask of the neighbours of ``cur`` not worth relaxing, given the move ``d`` that gave it its g: the
-    ones behind it (``behind``); the side neighbours the predecessor reaches strictly cheaper without this
-    cell: after an orthogonal arrival by the diagonal move from the predecessor (√2·w(n) < w(cell) + w(n)),
-    after a diagonal one by two orthogonal moves through m (w(m) + w(n) < √2·(w(cell) + w(n))); and after
-    an orthogonal arrival the forward diagonals the predecessor reaches at no more cost diagonal-first
-    through the side cell s (√2·w(s) + w(n) ≤ w(cell) + √2·w(n)): the canonical order of grid paths, ties
-    go to the diagonal-first one, which is never pruned itself (from s, n is straight ahead)."""
-    skip = behind[d]
-    if d == 8:
-        return skip
-    wc = table[flat[_u(cur)]]
-    for j in range(2):
-        k = sides[d, j]
-        if d < 4:
-            if SQRT2 * fo[k] < wc + fo[k]:
-                skip |= 1 << k
-            k = sides[d, 2 + j]
-            wn = table[flat[_u(cur + offs[k])]]
-            if SQRT2 * fo[mids[d, 2 + j]] + wn <= wc + SQRT2 * wn:
-                skip |= 1 << k
-        else:
-            wn = table[flat[_u(cur + offs[k])]]
-            if fo[mids[d, j]] + wn < SQRT2 * (wc + wn):
-                skip |= 1 << k
-    return skip
-
-
-@njit(cache=True)
-def _behind_masks(drs, dcs):
-    """Per arrival move a (index 8 = none): bit k set when neighbour k lies behind a (negative dot product).
-    From the predecessor p = cell − a, each such neighbour is p itself or one move from p that costs less
-    than going through the cell, so relaxing it from the cell can never help."""
-    behind = np.zeros(9, np.int64)
-    for a in range(8):
-        for k in range(8):
-            if drs[k] * drs[a] + dcs[k] * dcs[a] < 0:
-                behind[a] |= 1 << k
-    return behind
-
-
 # _expand's outcomes
 _FOUND = 1
 _EXHAUSTED = 0
@@ -378,7 +302,7 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
     g (kept in the cell's state word): the predecessor p and the two cells next to both, which p reaches
     directly by a move costing less than any detour through this cell; nor of the two side neighbours when
-    p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
+    p reaches them strictly cheaper without this cell (``_expand_after``). A skipped move is never on a cheapest
     path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
     reachable from the start is closed.
     """
@@ -400,12 +324,9 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
     drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
     dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
-    sides, mids = _side_moves(drs, dcs)
-    moves = (drs, dcs, drs * cols + dcs, _behind_masks(drs, dcs), sides, mids)
-    fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
     while True:
         status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale,
-                         delta, start, buckets, counts, state, moves, fo)
+                         delta, start, buckets, counts, state, drs, dcs)
         if status != _NEED_ROOM:
             return status == _FOUND, state[3]
         buckets = _room(buckets, state[2] + 8)
@@ -413,13 +334,12 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
 
 @njit(cache=True)
 def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta, start, buckets,
-            counts, state, moves, fo):
+            counts, state, drs, dcs):
     """The expansion loop of ``astar_buckets`` from ``state``; returns _FOUND, _EXHAUSTED or, before a pop that
     could overflow a bucket, _NEED_ROOM (state saved: the caller grows ``buckets`` and calls again). A separate
     function that creates no array and reassigns none: an array made or regrown in the loop's function is
     reference-counted by numba on every relaxation that passes it to a helper (an atomic add and a call each,
     12 % of the search time)."""
-    drs, dcs, offs, behind, sides, mids = moves
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
     inv = 1.0 / delta
@@ -444,30 +364,35 @@ def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_
                 continue
             expansions += 1
             if _interior(r, c, rows, cols, sr, sc, far):
-                fo[0] = table[flat[_u(cur - cols)]]
-                fo[1] = table[flat[_u(cur + cols)]]
-                fo[2] = table[flat[_u(cur - 1)]]
-                fo[3] = table[flat[_u(cur + 1)]]
-                skip = _prune(d, behind, sides, mids, fo, table, flat, cur, offs)
-                for k in range(8):
-                    if (skip >> k) & 1:
-                        continue
-                    nr, nc = _neighbour(r, c, k)     # k is a constant in the unrolled loop: no table loads
-                    nb = cur + (nr - r) * cols + (nc - c)
-                    if k < 4:
-                        f = fo[k]
-                    elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
-                        continue    # no squeeze between two blocked orthogonal cells
-                    else:
-                        f = SQRT2 * table[flat[_u(nb)]]
-                    if f == np.inf:
-                        continue
-                    key = _relax(rec, recg, k, nb, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
-                    if key >= 0:
-                        fullest = max(fullest, _file(buckets, counts, key, nb))
-                        pending += 1
-                        # the record straight ahead of nb: nb is often popped next (LIFO) and reads it then
-                        _prefetch(rec, 2 * (2 * nb - cur))
+                if d == 0:      # one copy per arrival move: its pruning rules fold to constants
+                    added, most = _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 1:
+                    added, most = _expand_after(1, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 2:
+                    added, most = _expand_after(2, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 3:
+                    added, most = _expand_after(3, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 4:
+                    added, most = _expand_after(4, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 5:
+                    added, most = _expand_after(5, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 6:
+                    added, most = _expand_after(6, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 7:
+                    added, most = _expand_after(7, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                else:
+                    added, most = _expand_after(8, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                pending += added
+                fullest = max(fullest, most)
             else:
                 added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc,
                                              esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)
@@ -479,6 +404,83 @@ def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_
         cb += 1
     state[3] = expansions
     return _EXHAUSTED
+
+
+@njit(cache=True, inline="always")
+def _mdr(k):
+    """Row step of move k (see _neighbour)."""
+    return (k == 1) - (k == 0) if k < 4 else (1 if k >= 6 else -1)
+
+
+@njit(cache=True, inline="always")
+def _mdc(k):
+    """Column step of move k."""
+    return (k == 3) - (k == 2) if k < 4 else (1 if k & 1 else -1)
+
+
+@njit(cache=True, inline="always")
+def _orth(dr, dc):
+    """Index of the orthogonal move (dr, dc)."""
+    return (1 if dr == 1 else 0) if dr != 0 else (3 if dc == 1 else 2)
+
+
+@njit(cache=True, inline="always")
+def _pick(i, f0, f1, f2, f3):
+    return f0 if i == 0 else (f1 if i == 1 else (f2 if i == 2 else f3))
+
+
+@njit(cache=True, inline="always")
+def _expand_after(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask, buckets,
+                  counts):
+    """Relax the neighbours of interior cell ``cur`` worth relaxing given the move ``d`` that gave it its g (8:
+    none, all are). Skipped: the three behind d (negative dot product: from the predecessor p = cur − d each
+    is p itself or one move from p that costs less than going through cur); the side neighbours p reaches
+    strictly cheaper without cur: after a straight arrival by p's diagonal move (√2·w(n) < w(cur) + w(n)),
+    after a diagonal one by two straight moves through m (w(m) + w(n) < √2·(w(cur) + w(n))); and after a
+    straight arrival the forward diagonals p reaches at no more cost diagonal-first through the side cell s
+    (√2·w(s) + w(n) ≤ w(cur) + √2·w(n)): the canonical order of grid paths, ties go to the diagonal-first
+    one, which is never skipped itself (from s, n is straight ahead). A skipped move is never needed for a
+    cheapest path. Called with ``d`` a literal (one copy per arrival move) and k unrolled, every test on d
+    and k folds to a constant: the branches left are on the weights, where a table-driven version loaded
+    masks and moved through a bit loop (5 % slower). Returns (entries filed, the longest bucket after)."""
+    f0 = table[flat[_u(cur - cols)]]
+    f1 = table[flat[_u(cur + cols)]]
+    f2 = table[flat[_u(cur - 1)]]
+    f3 = table[flat[_u(cur + 1)]]
+    wc = table[flat[_u(cur)]]
+    ddr, ddc = _mdr(d), _mdc(d)
+    added = most = 0
+    for k in range(8):
+        kdr, kdc = _mdr(k), _mdc(k)
+        nb = cur + kdr * cols + kdc
+        dot = kdr * ddr + kdc * ddc
+        if d < 8 and dot < 0:
+            continue                            # behind the arrival: the predecessor reaches it cheaper
+        if k < 4:
+            f = _pick(k, f0, f1, f2, f3)
+            if d < 4 and dot == 0 and SQRT2 * f < wc + f:
+                continue                        # side: the predecessor's diagonal is cheaper
+        else:
+            if _pick(_orth(kdr, 0), f0, f1, f2, f3) == np.inf and _pick(_orth(0, kdc), f0, f1, f2, f3) == np.inf:
+                continue                        # no squeeze between two blocked orthogonal cells
+            wn = table[flat[_u(nb)]]
+            if d < 4 and dot > 0:               # forward diagonal after a straight move: diagonal-first wins ties
+                if SQRT2 * _pick(_orth(kdr - ddr, kdc - ddc), f0, f1, f2, f3) + wn <= wc + SQRT2 * wn:
+                    continue
+            elif 4 <= d < 8 and dot == 0:       # side diagonal after a diagonal move: two straight moves cheaper
+                m = _orth(0 if kdr == ddr else kdr, 0 if kdc == ddc else kdc)
+                if _pick(m, f0, f1, f2, f3) + wn < SQRT2 * (wc + wn):
+                    continue
+            f = SQRT2 * wn
+        if f == np.inf:
+            continue
+        key = _relax(rec, recg, k, nb, gcur + f, seen, r + kdr, c + kdc, gr, gc, h_scale, inv, cb, mask)
+        if key >= 0:
+            most = max(most, _file(buckets, counts, key, nb))
+            added += 1
+            # the record straight ahead of nb: nb is often popped next (LIFO) and reads it then
+            _prefetch(rec, 2 * (2 * nb - cur))
+    return added, most
 
 
 @njit(cache=True)
