@@ -5,8 +5,9 @@ Kept apart from planner.py so the Python-level logic stays readable; compiled wi
 the first process on a machine pays the compile time.
 
 Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation reads and
-writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is 2·stamp
-(seen) or 2·stamp+1 (closed) for the plan with that stamp, so the buffer is reused between plans without
+writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is
+32·stamp + 2·move + closed for the plan with that stamp (``STATE_SHIFT``; move 0-7 is the move that last gave
+the cell its g, 8 none, which the bucket kernel's pruning reads), so the buffer is reused between plans without
 clearing. No parent array: ``backtrack`` walks the g values back. The open list is a 4-ary heap of single
 int64 entries (f as float32 bits above the cell index): a heap move is one 8-byte copy, and a pop sifts
 down half as many levels as in a binary heap.
@@ -17,9 +18,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 SQRT2 = math.sqrt(2.0)
+STATE_SHIFT = 5     # a record state word: stamp << STATE_SHIFT | move << 1 | closed, move 0-8 (see the module doc)
 STRAIGHT_TOL = 2e-7   # relative: a step within this of the cheapest counts as tying with it (float32 g)
 TIE_EPS = 1e-6
 UB_TOL = 1e-6   # relative: a cell whose f is within this of the goal's g found so far is not expanded
@@ -132,7 +136,7 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
     heap = np.empty(1 << 14, np.int64)
-    seen = 2 * stamp
+    seen = stamp << STATE_SHIFT        # seen, move 0: this kernel does not prune by move
     done = seen + 1
     hw = h_weight * h_scale * (1.0 + TIE_EPS)
     recg[2 * start + 1] = 0.0
@@ -170,6 +174,28 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_weight, h_s
     return False, expansions
 
 
+@intrinsic
+def _prefetch(typingctx, arr, idx):
+    """Hint the cache line holding ``arr[idx]`` toward L1 for writing (LLVM's prefetch: no fault on a bad address,
+    no effect on any value)."""
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        byte = ir.PointerType(ir.IntType(8))
+        fnty = ir.FunctionType(ir.VoidType(), [byte, ir.IntType(32), ir.IntType(32), ir.IntType(32)])
+        fn = builder.module.declare_intrinsic("llvm.prefetch", [byte], fnty)
+        i32 = ir.IntType(32)
+        builder.call(fn, [builder.bitcast(builder.gep(data, [args[1]]), byte), i32(1), i32(3), i32(1)])
+        return context.get_dummy_value()
+    return types.void(arr, idx), codegen
+
+
+@njit(cache=True, inline="always")
+def _u(i):
+    """An index as unsigned: numba then skips the negative-index wraparound it adds to every signed index (a
+    shift, an and, and the dimension kept in a register or reloaded from the stack, at each array access)."""
+    return np.uint64(i)
+
+
 @njit(cache=True, inline="always")
 def _key(g, h, inv, cb, mask):
     """Ring slot of f = g + h (never below the current bucket: float rounding only)."""
@@ -177,31 +203,36 @@ def _key(g, h, inv, cb, mask):
 
 
 @njit(cache=True, inline="always")
-def _relax(rec, recg, dirs, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
-    """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better, appending it to the
-    bucket of its f (the heuristic is only computed then: most relaxations fail). Returns that bucket's new
-    length, 0 if nothing was appended. The caller guarantees room in the bucket."""
-    st = rec[2 * nb]
+def _relax(rec, recg, k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask):
+    """Give cell ``nb`` = (nr, nc) g = ``ng``, reached by move ``k``, if that is better. Returns the ring slot
+    of the bucket it is to be appended to (``_file``), -1 if none (the heuristic is only computed when the g
+    improves: most relaxations fail). Takes no bucket arrays: numba kept reference counting the ones passed
+    into this branchy function on every call."""
+    st = rec[_u(2 * nb)]
     if st >= seen:                  # seen or closed in this plan
-        old = np.float64(recg[2 * nb + 1])
+        old = np.float64(recg[_u(2 * nb + 1)])
         if not ng < old:
-            return 0
-        rec[2 * nb] = seen
-        recg[2 * nb + 1] = ng
-        dirs[nb] = k
+            return -1
+        rec[_u(2 * nb)] = seen | (k << 1)
+        recg[_u(2 * nb + 1)] = ng
         h = h_scale * _octile(nr, nc, gr, gc)
         key = _key(ng, h, inv, cb, mask)
-        if st == seen and _key(old, h, inv, cb, mask) == key:
-            return 0                # its open entry is already in that bucket and reads the new g when popped
-    else:
-        rec[2 * nb] = seen
-        recg[2 * nb + 1] = ng
-        dirs[nb] = k
-        key = _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
-    n = counts[key]
-    buckets[key, n] = nb
-    counts[key] = n + 1
-    return n + 1
+        if not st & 1 and _key(old, h, inv, cb, mask) == key:
+            return -1               # its open entry is already in that bucket and reads the new g when popped
+        return key
+    rec[_u(2 * nb)] = seen | (k << 1)
+    recg[_u(2 * nb + 1)] = ng
+    return _key(ng, h_scale * _octile(nr, nc, gr, gc), inv, cb, mask)
+
+
+@njit(cache=True, inline="always")
+def _file(buckets, counts, key, nb):
+    """Append cell ``nb`` to the bucket in ring slot ``key``; returns that bucket's new length. The caller
+    guarantees room."""
+    n = counts[_u(key)] + 1
+    buckets[_u(key), _u(n - 1)] = nb
+    counts[_u(key)] = n
+    return n
 
 
 @njit(cache=True, inline="always")
@@ -212,20 +243,23 @@ def _interior(r, c, rows, cols, sr, sc, far):
 
 @njit(cache=True, inline="always")
 def _close(rec, recg, cur, seen, goal, f):
-    """Close the popped cell ``cur`` (f = ``f``); True when it is to be expanded. False for a duplicate entry
-    (closed already at this g) and for a cell that cannot lead to a cheaper goal than the one found
-    (``_past_goal``): that one is closed unexpanded, so a better g found later re-files it like any closed
-    cell."""
-    if rec[2 * cur] != seen:
-        return False
-    rec[2 * cur] = seen + 1
-    return not _past_goal(rec, recg, seen, goal, f)
+    """Close the popped cell ``cur`` (f = ``f``); returns the move that gave it its g (8: none) when it is to be
+    expanded, -1 if not: for a duplicate entry (closed already at this g) and for a cell that cannot lead to a
+    cheaper goal than the one found (``_past_goal``): that one is closed unexpanded, so a better g found later
+    re-files it like any closed cell."""
+    st = rec[_u(2 * cur)]
+    if st < seen or st & 1:
+        return -1
+    rec[_u(2 * cur)] = st | 1
+    if _past_goal(rec, recg, seen, goal, f):
+        return -1
+    return (st >> 1) & 15
 
 
 @njit(cache=True, inline="always")
 def _past_goal(rec, recg, seen, goal, f):
     """True when the goal already has a g in this plan and ``f`` is not below it (within UB_TOL)."""
-    return rec[2 * goal] >= seen and f >= np.float64(recg[2 * goal + 1]) * (1.0 - UB_TOL)
+    return rec[_u(2 * goal)] >= seen and f >= np.float64(recg[_u(2 * goal + 1)]) * (1.0 - UB_TOL)
 
 
 @njit(cache=True, inline="always")
@@ -238,84 +272,14 @@ def _room(buckets, need):
     return grown
 
 
-@njit(cache=True)
-def _side_moves(drs, dcs):
-    """Per arrival move a (row 8 = none; -1 where unused), columns 0-1: the two neighbours beside a (dot
-    product 0, same kind of move as a), with for a diagonal a the orthogonal neighbour m through which the
-    predecessor reaches that side cell by two orthogonal moves; columns 2-3, for an orthogonal a: the two
-    forward diagonals, with the side cell s through which the predecessor reaches them diagonal-first."""
-    sides = np.full((9, 4), -1, np.int64)
-    mids = np.full((9, 4), -1, np.int64)
-    for a in range(8):
-        j = 0
-        f = 2
-        for k in range(8):
-            dot = drs[k] * drs[a] + dcs[k] * dcs[a]
-            if (k < 4) == (a < 4) and k != a and dot == 0:
-                sides[a, j] = k
-                if a >= 4:   # m = the side cell minus the component it shares with a
-                    mids[a, j] = _orth_index(drs, dcs, 0 if drs[k] == drs[a] else drs[k],
-                                             0 if dcs[k] == dcs[a] else dcs[k])
-                j += 1
-            elif a < 4 and k >= 4 and dot > 0:
-                sides[a, f] = k
-                mids[a, f] = _orth_index(drs, dcs, drs[k] - drs[a], dcs[k] - dcs[a])
-                f += 1
-    return sides, mids
-
-
-@njit(cache=True, inline="always")
-def _orth_index(drs, dcs, dr, dc):
-    for q in range(4):
-        if drs[q] == dr and dcs[q] == dc:
-            return q
-    return -1
-
-
-@njit(cache=True, inline="always")
-def _prune(d, behind, sides, mids, fo, table, flat, cur, offs):
-    """Bit mask of the neighbours of ``cur`` not worth relaxing, given the move ``d`` that gave it its g: the
-    ones behind it (``behind``); the side neighbours the predecessor reaches strictly cheaper without this
-    cell: after an orthogonal arrival by the diagonal move from the predecessor (√2·w(n) < w(cell) + w(n)),
-    after a diagonal one by two orthogonal moves through m (w(m) + w(n) < √2·(w(cell) + w(n))); and after
-    an orthogonal arrival the forward diagonals the predecessor reaches at no more cost diagonal-first
-    through the side cell s (√2·w(s) + w(n) ≤ w(cell) + √2·w(n)): the canonical order of grid paths, ties
-    go to the diagonal-first one, which is never pruned itself (from s, n is straight ahead)."""
-    skip = behind[d]
-    if d == 8:
-        return skip
-    wc = table[flat[cur]]
-    for j in range(2):
-        k = sides[d, j]
-        if d < 4:
-            if SQRT2 * fo[k] < wc + fo[k]:
-                skip |= 1 << k
-            k = sides[d, 2 + j]
-            wn = table[flat[cur + offs[k]]]
-            if SQRT2 * fo[mids[d, 2 + j]] + wn <= wc + SQRT2 * wn:
-                skip |= 1 << k
-        else:
-            wn = table[flat[cur + offs[k]]]
-            if fo[mids[d, j]] + wn < SQRT2 * (wc + wn):
-                skip |= 1 << k
-    return skip
+# _expand's outcomes
+_FOUND = 1
+_EXHAUSTED = 0
+_NEED_ROOM = -1
 
 
 @njit(cache=True)
-def _behind_masks(drs, dcs):
-    """Per arrival move a (index 8 = none): bit k set when neighbour k lies behind a (negative dot product).
-    From the predecessor p = cell − a, each such neighbour is p itself or one move from p that costs less
-    than going through the cell, so relaxing it from the cell can never help."""
-    behind = np.zeros(9, np.int64)
-    for a in range(8):
-        for k in range(8):
-            if drs[k] * drs[a] + dcs[k] * dcs[a] < 0:
-                behind[a] |= 1 << k
-    return behind
-
-
-@njit(cache=True)
-def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
+def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
 
     With a consistent heuristic the keys f = g + h of expanded cells never decrease, and one move raises f
@@ -336,83 +300,213 @@ def astar_buckets(costs, table, start, goal, rec, dirs, stamp, esc_r2, esc_cost,
     Cells away from the map edge and from the start's escape disc (nearly all) take a branch-light path:
     fixed flat offsets, no bounds checks, the four orthogonal factors loaded once and reused for the
     diagonal-squeeze test, and no relaxation of the three neighbours behind the move that gave the cell its
-    g (``dirs``, one byte per cell): the predecessor p and the two cells next to both, which p reaches
+    g (kept in the cell's state word): the predecessor p and the two cells next to both, which p reaches
     directly by a move costing less than any detour through this cell; nor of the two side neighbours when
-    p reaches them strictly cheaper without this cell (``_prune``). A skipped move is never on a cheapest
+    p reaches them strictly cheaper without this cell (``_expand_after``). A skipped move is never on a cheapest
     path, so every g stays exact. Same record layout and return value as ``astar``; on failure every cell
     reachable from the start is closed.
     """
     rows, cols = costs.shape
-    flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
-    seen = 2 * stamp
+    seen = stamp << STATE_SHIFT
     inv = 1.0 / delta
     mask = nbuckets - 1
     buckets = np.empty((nbuckets, 1024), np.int32)
     counts = np.zeros(nbuckets, np.int64)
-    rec[2 * start] = seen - 2      # an earlier plan's state, so the start is filed below
+    rec[2 * start] = seen - 1      # an earlier plan's state, so the start is filed below
     cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    fullest = _relax(rec, recg, dirs, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask, buckets, counts)
-    pending = 1
-    far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
+    key = _relax(rec, recg, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
+    fullest = _file(buckets, counts, key, start)
+    # the loop's state between calls of _expand: current bucket, open entries, fullest bucket, expansions
+    state = np.array([cb, 1, fullest, 0], np.int64)
     # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
     drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
     dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
-    offs = drs * cols + dcs
-    fo = np.empty(4, np.float64)      # the orthogonal neighbours' factors of the cell being expanded
-    behind = _behind_masks(drs, dcs)
-    sides, mids = _side_moves(drs, dcs)
-    expansions = 0
+    while True:
+        status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale,
+                         delta, start, buckets, counts, state, drs, dcs)
+        if status != _NEED_ROOM:
+            return status == _FOUND, state[3]
+        buckets = _room(buckets, state[2] + 8)
+
+
+@njit(cache=True)
+def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta, start, buckets,
+            counts, state, drs, dcs):
+    """The expansion loop of ``astar_buckets`` from ``state``; returns _FOUND, _EXHAUSTED or, before a pop that
+    could overflow a bucket, _NEED_ROOM (state saved: the caller grows ``buckets`` and calls again). A separate
+    function that creates no array and reassigns none: an array made or regrown in the loop's function is
+    reference-counted by numba on every relaxation that passes it to a helper (an atomic add and a call each,
+    12 % of the search time)."""
+    sr, sc = start // cols, start % cols
+    gr, gc = goal // cols, goal % cols
+    inv = 1.0 / delta
+    mask = buckets.shape[0] - 1
+    room = buckets.shape[1] - 8
+    cb, pending, fullest, expansions = state[0], state[1], state[2], state[3]
+    far = int(math.sqrt(max(esc_r2, 0.0))) + 2        # rows/cols from the start beyond which no escape applies
     while pending > 0:
         b = cb & mask
         while counts[b] > 0:
+            if fullest > room:
+                state[0], state[1], state[2], state[3] = cb, pending, fullest, expansions
+                return _NEED_ROOM
             counts[b] -= 1              # last in, first out: see the docstring
-            cur = buckets[b, counts[b]]
+            cur = buckets[_u(b), _u(counts[b])]
             pending -= 1
             r = cur // cols
             c = cur - r * cols
-            gcur = np.float64(recg[2 * cur + 1])
-            if not _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc)):
+            gcur = np.float64(recg[_u(2 * cur + 1)])
+            d = _close(rec, recg, cur, seen, goal, gcur + h_scale * _octile(r, c, gr, gc))
+            if d < 0:
                 continue
             expansions += 1
-            buckets = _room(buckets, fullest + 8)
             if _interior(r, c, rows, cols, sr, sc, far):
-                for k in range(4):
-                    fo[k] = table[flat[cur + offs[k]]]
-                skip = _prune(dirs[cur], behind, sides, mids, fo, table, flat, cur, offs)
-                for k in range(8):
-                    if (skip >> k) & 1:
-                        continue
-                    if k < 4:
-                        f = fo[k]
-                    elif fo[(k >> 1) - 2] == np.inf and fo[2 + (k & 1)] == np.inf:
-                        continue    # no squeeze between two blocked orthogonal cells
-                    else:
-                        f = SQRT2 * table[flat[cur + offs[k]]]
-                    if f == np.inf:
-                        continue
-                    n = _relax(rec, recg, dirs, k, cur + offs[k], gcur + f, seen, r + drs[k], c + dcs[k], gr, gc,
-                               h_scale, inv, cb, mask, buckets, counts)
-                    pending += n > 0
-                    fullest = max(fullest, n)
+                if d == 0:      # one copy per arrival move: its pruning rules fold to constants
+                    added, most = _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 1:
+                    added, most = _expand_after(1, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 2:
+                    added, most = _expand_after(2, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 3:
+                    added, most = _expand_after(3, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 4:
+                    added, most = _expand_after(4, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 5:
+                    added, most = _expand_after(5, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 6:
+                    added, most = _expand_after(6, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                elif d == 7:
+                    added, most = _expand_after(7, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                else:
+                    added, most = _expand_after(8, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                                h_scale, inv, cb, mask, buckets, counts)
+                pending += added
+                fullest = max(fullest, most)
             else:
-                for k in range(8):
-                    nr, nc = r + drs[k], c + dcs[k]
-                    if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
-                        continue
-                    f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
-                    if f == np.inf:
-                        continue
-                    n = _relax(rec, recg, dirs, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb,
-                               mask, buckets, counts)
-                    pending += n > 0
-                    fullest = max(fullest, n)
+                added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc,
+                                             esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)
+                pending += added
+                fullest = max(fullest, most)
         if _past_goal(rec, recg, seen, goal, (cb + 1) * delta):     # every open f >= the next bucket's edge
-            return True, expansions
+            state[3] = expansions
+            return _FOUND
         cb += 1
-    return False, expansions
+    state[3] = expansions
+    return _EXHAUSTED
+
+
+@njit(cache=True, inline="always")
+def _mdr(k):
+    """Row step of move k (see _neighbour)."""
+    return (k == 1) - (k == 0) if k < 4 else (1 if k >= 6 else -1)
+
+
+@njit(cache=True, inline="always")
+def _mdc(k):
+    """Column step of move k."""
+    return (k == 3) - (k == 2) if k < 4 else (1 if k & 1 else -1)
+
+
+@njit(cache=True, inline="always")
+def _orth(dr, dc):
+    """Index of the orthogonal move (dr, dc)."""
+    return (1 if dr == 1 else 0) if dr != 0 else (3 if dc == 1 else 2)
+
+
+@njit(cache=True, inline="always")
+def _pick(i, f0, f1, f2, f3):
+    return f0 if i == 0 else (f1 if i == 1 else (f2 if i == 2 else f3))
+
+
+@njit(cache=True, inline="always")
+def _expand_after(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask, buckets,
+                  counts):
+    """Relax the neighbours of interior cell ``cur`` worth relaxing given the move ``d`` that gave it its g (8:
+    none, all are). Skipped: the three behind d (negative dot product: from the predecessor p = cur − d each
+    is p itself or one move from p that costs less than going through cur); the side neighbours p reaches
+    strictly cheaper without cur: after a straight arrival by p's diagonal move (√2·w(n) < w(cur) + w(n)),
+    after a diagonal one by two straight moves through m (w(m) + w(n) < √2·(w(cur) + w(n))); and after a
+    straight arrival the forward diagonals p reaches at no more cost diagonal-first through the side cell s
+    (√2·w(s) + w(n) ≤ w(cur) + √2·w(n)): the canonical order of grid paths, ties go to the diagonal-first
+    one, which is never skipped itself (from s, n is straight ahead). A skipped move is never needed for a
+    cheapest path. Called with ``d`` a literal (one copy per arrival move) and k unrolled, every test on d
+    and k folds to a constant: the branches left are on the weights, where a table-driven version loaded
+    masks and moved through a bit loop (5 % slower). Returns (entries filed, the longest bucket after)."""
+    f0 = table[flat[_u(cur - cols)]]
+    f1 = table[flat[_u(cur + cols)]]
+    f2 = table[flat[_u(cur - 1)]]
+    f3 = table[flat[_u(cur + 1)]]
+    wc = table[flat[_u(cur)]]
+    ddr, ddc = _mdr(d), _mdc(d)
+    added = most = 0
+    for k in range(8):
+        kdr, kdc = _mdr(k), _mdc(k)
+        nb = cur + kdr * cols + kdc
+        dot = kdr * ddr + kdc * ddc
+        if d < 8 and dot < 0:
+            continue                            # behind the arrival: the predecessor reaches it cheaper
+        if k < 4:
+            f = _pick(k, f0, f1, f2, f3)
+            if d < 4 and dot == 0 and SQRT2 * f < wc + f:
+                continue                        # side: the predecessor's diagonal is cheaper
+        else:
+            if _pick(_orth(kdr, 0), f0, f1, f2, f3) == np.inf and _pick(_orth(0, kdc), f0, f1, f2, f3) == np.inf:
+                continue                        # no squeeze between two blocked orthogonal cells
+            wn = table[flat[_u(nb)]]
+            if d < 4 and dot > 0:               # forward diagonal after a straight move: diagonal-first wins ties
+                if SQRT2 * _pick(_orth(kdr - ddr, kdc - ddc), f0, f1, f2, f3) + wn <= wc + SQRT2 * wn:
+                    continue
+            elif 4 <= d < 8 and dot == 0:       # side diagonal after a diagonal move: two straight moves cheaper
+                m = _orth(0 if kdr == ddr else kdr, 0 if kdc == ddc else kdc)
+                if _pick(m, f0, f1, f2, f3) + wn < SQRT2 * (wc + wn):
+                    continue
+            f = SQRT2 * wn
+        if f == np.inf:
+            continue
+        key = _relax(rec, recg, k, nb, gcur + f, seen, r + kdr, c + kdc, gr, gc, h_scale, inv, cb, mask)
+        if key >= 0:
+            most = max(most, _file(buckets, counts, key, nb))
+            added += 1
+            # the record straight ahead of nb: nb is often popped next (LIFO) and reads it then
+            _prefetch(rec, 2 * (2 * nb - cur))
+    return added, most
+
+
+@njit(cache=True)
+def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc, esc_r2, esc_cost,
+                   h_scale, inv, cb, mask, buckets, counts, drs, dcs):
+    """Expand a cell on the map edge or near the start (the escape disc): bounds-checked, ``_move_cost``'s full
+    rules, no pruning. Returns (entries filed, the longest bucket after filing)."""
+    added = most = 0
+    for k in range(8):
+        nr, nc = r + drs[k], c + dcs[k]
+        if nr < 0 or nr >= rows or nc < 0 or nc >= cols:
+            continue
+        f = _move_cost(flat, table, cols, r, c, nr, nc, sr, sc, esc_r2, esc_cost)
+        if f == np.inf:
+            continue
+        key = _relax(rec, recg, k, nr * cols + nc, gcur + f, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
+        if key >= 0:
+            most = max(most, _file(buckets, counts, key, nr * cols + nc))
+            added += 1
+    return added, most
+
+
+def closed(rec: np.ndarray, cell: int, stamp: int) -> bool:
+    """Whether the search with ``stamp`` closed ``cell`` (flat index)."""
+    st = int(rec[2 * cell])
+    return st >> STATE_SHIFT == stamp and bool(st & 1)
 
 
 @njit(cache=True)
@@ -428,7 +522,7 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
     flat = costs.ravel()
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols
-    done = 2 * stamp + 1
+    this = stamp << STATE_SHIFT
     out = np.empty(256, np.int64)
     m = 0
     cur = cell
@@ -453,7 +547,8 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
                 continue
             p = pr * cols + pc
-            if rec[2 * p] != done:
+            st = rec[2 * p]
+            if st < this or not st & 1:    # not closed in this plan
                 continue
             v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
             if v < bestv:

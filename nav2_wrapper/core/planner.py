@@ -99,13 +99,12 @@ class GlobalPlanner:
         """An 8-byte search record per cell (see ``_search``), reused between plans via stamps."""
         if n != self._size:
             self._rec = np.zeros(2 * n, np.int32)
-            self._dirs = np.zeros(n, np.int8)    # the move that last gave each cell its g (bucket kernel)
             self._size, self._stamp = n, 0
         self._next_stamp()
 
     def _next_stamp(self) -> None:
         self._stamp += 1
-        if self._stamp >= 2**30 - 2:
+        if self._stamp >= 2 ** (31 - _search.STATE_SHIFT) - 1:     # the state word stays a positive int32
             self._rec[:] = 0
             self._stamp = 1
 
@@ -134,8 +133,7 @@ class GlobalPlanner:
         cells, gvals, expansions = self._search(search, target)
         if cells is None:
             # The failed one-sided search closed the start's whole component: take the nearest closed candidate.
-            closed = 2 * self._stamp + 1
-            reach = [int(c) for c in candidates if self._rec[2 * c] == closed] if len(candidates) else []
+            reach = [int(c) for c in candidates if _search.closed(self._rec, int(c), self._stamp)]
             if not reach:
                 why = self._blocked_reason(costs[gr, gc], goal) if not np.isfinite(table[costs[gr, gc]]) else (
                     f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is not reachable from the start "
@@ -161,7 +159,7 @@ class GlobalPlanner:
         (then every cell reachable from the start is closed)."""
         if self.cfg.heuristic_weight == 1.0:
             found, expansions = _search.astar_buckets(
-                search.costs, search.table, search.start, target, self._rec, self._dirs, self._stamp, search.esc_r2,
+                search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
                 search.esc_cost, search.h_scale, BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
         else:
             found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec,

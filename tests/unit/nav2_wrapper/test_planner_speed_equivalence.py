@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig
+from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig, _search
 from nav2_wrapper.core import planner as planner_module
 from nav2_wrapper.core.costs import LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from nav2_wrapper.robot_io import load_footprint
@@ -177,6 +177,51 @@ def test_same_cost_on_repeated_plans_with_reused_buffers() -> None:
     assert first.ok == again.ok
     assert again.cost == pytest.approx(first.cost, rel=1e-9)
     np.testing.assert_allclose(again.path, first.path)
+
+
+@pytest.mark.parametrize("weight", [1.0, 1.25])
+def test_stamp_wraparound_keeps_costs_exact(weight: float) -> None:
+    """A record's state word packs the plan's stamp above the arrival move and the closed bit; when the stamp
+    nears the int32 limit the buffer is cleared and stamps restart. Plans on both sides of that wrap (both
+    kernels) cost what plain Dijkstra says, and the failure path still finds the start's closed cells."""
+    rng = np.random.default_rng(23)
+    cm = random_costmap(rng, boxes=8)
+    planner = GlobalPlanner(PlannerConfig(heuristic_weight=weight))
+    table = planner.traversal_table()
+    free = np.argwhere(cm.costs < INSCRIBED)
+    pairs = [(free[rng.integers(len(free))], free[rng.integers(len(free))]) for _ in range(6)]
+    planner.plan(cm, centre(cm, pairs[0][0]), centre(cm, pairs[0][1]))
+    planner._stamp = 2 ** (31 - _search.STATE_SHIFT) - 4        # three plans before the wrap
+    for a, b in pairs:
+        got = planner.plan(cm, centre(cm, a), centre(cm, b))
+        want = reference_cost(cm.costs, table, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), 49.0, 5.0)
+        assert got.ok, got.reason
+        if weight == 1.0:
+            assert got.cost == pytest.approx(want, rel=1e-5, abs=1e-4)
+        else:
+            assert want - 1e-4 <= got.cost <= weight * want + 1e-4
+        assert int(planner._rec.min()) >= 0          # the packed state never overflowed int32
+    assert planner._stamp < 8, planner._stamp        # the wrap happened
+
+
+@pytest.mark.parametrize("shape", [(1, 60), (60, 1), (2, 40), (3, 3)])
+def test_one_and_two_row_maps(shape: tuple[int, int]) -> None:
+    """Maps with no interior cell (every cell on the edge) or a tiny one: the kernel's edge path only."""
+    rows, cols = shape
+    costs = np.zeros((rows, cols), np.uint8)
+    costs.flat[::7] = 120
+    cm = Costmap(CostmapConfig(obstacle_layer=False, footprint=FP))
+    cm.set_static_map(GridMap(np.zeros((rows, cols), np.int8), RES))
+    cm.costs[:] = costs
+    planner = GlobalPlanner(PlannerConfig(heuristic_weight=1.0))
+    table = planner.traversal_table()
+    cells = [(0, 0), (rows - 1, cols - 1), (rows // 2, cols // 2), (0, cols - 1), (rows - 1, 0)]
+    for a in cells:
+        for b in cells:
+            want = reference_cost(cm.costs, table, a, b, 49.0, 5.0)
+            got = planner.plan(cm, centre(cm, np.array(a)), centre(cm, np.array(b)))
+            assert got.ok, got.reason
+            assert got.cost == pytest.approx(want, rel=1e-5, abs=1e-4), (shape, a, b)
 
 
 def test_unreachable_goal_fails_with_reason_and_blocked_goal_uses_tolerance() -> None:
