@@ -140,17 +140,18 @@ def _body_clearance(grid: np.ndarray, poses: list[tuple[float, float, float]]) -
 def test_keeps_body_clearance_entering_a_doorway_at_an_angle(start: tuple[float, float, float]) -> None:
     # a 0.8 m opening entered along a path that bends into it: the centre's cost is the same for a body lined up
     # with the opening and one still turned toward the approach, the corners are not; the clearance critic
-    # keeps them off the jambs (without it the corner passes within about a centimetre)
+    # keeps them off the jambs when switched on (without it the corner passes within about a centimetre)
     from nav2_wrapper.core.planner import densify
 
     cm, grid = _doorway_costmap(0.8)
     path = densify(np.array([start[:2], (3.4, 3.0), (4.6, 3.0), (7.0, 3.0)]), 0.05)
     clear = {}
-    for weight in (0.0, MppiConfig().clearance_weight):
+    on = 20.0   # the critic is off by default (see MppiController._collisions): this is the weight it was measured at
+    for weight in (0.0, on):
         ctl = MppiController(ControllerConfig(footprint=FOOTPRINT), MppiConfig(clearance_weight=weight))
         ctl.set_path(path)
         poses, _ = _drive(ctl, cm, start, (7.0, 3.0, 0.0), steps=600)
         assert math.hypot(poses[-1][0] - 7.0, poses[-1][1] - 3.0) < 0.15
         clear[weight] = _body_clearance(grid, poses)
-    assert clear[MppiConfig().clearance_weight] >= 0.04
-    assert clear[MppiConfig().clearance_weight] > clear[0.0] + 0.02
+    assert clear[on] >= 0.04
+    assert clear[on] > clear[0.0] + 0.02
