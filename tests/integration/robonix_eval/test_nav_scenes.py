@@ -22,6 +22,8 @@ def test_random_goals_succeed(scene: str) -> None:
     for r in results:
         assert r.state == "SUCCEEDED", (scene, r.goal, r.detail)
         assert r.collisions == 0, (scene, r.goal)
+        # no contact leaves room between the true body and the true obstacles, and indoors never a metre of it
+        assert 0.0 < r.closest_m < 1.0, (scene, r.goal, r.closest_m)
         assert r.within_tolerance, (scene, r.goal, r.final_error_xy, r.final_error_yaw)
         assert r.final_speed < 0.02
         assert r.path_ratio < 1.5, (scene, r.goal, r.path_length, r.shortest_length)
