@@ -77,3 +77,24 @@ def test_a_doorway_is_crossed_lined_up_with_the_most_room(offset: float, angle: 
     assert _off_crossing(yaw) <= 30.0 + 1e-6, math.degrees(yaw)
     assert chosen > sideways + 0.03, (chosen, sideways)
     assert chosen >= best - RES, (math.degrees(yaw), chosen, best)   # the most room, to within a cell
+
+
+def test_mppi_weights_the_heading_up_only_for_the_passage_yaw() -> None:
+    from nav2_wrapper.core.mppi import MppiConfig, MppiController
+
+    cm, _ = _door()
+    path = densify(np.array([(DOOR_X, 1.0), (DOOR_X, 5.0)]), 0.05)
+    ctl = MppiController(ControllerConfig(footprint=FOOTPRINT), MppiConfig(passage_heading_gain=4.0))
+    ctl.set_path(path)
+    goal = (DOOR_X, 5.0, 0.0)
+    # 0.6 m before the wall: the door is ahead, the target is the passage yaw (lined up with the crossing)
+    target, gain = ctl._heading_target_and_gain(len(path) // 2 - 12, (DOOR_X, 2.45, 0.0), goal, cm)
+    assert gain == 4.0
+    assert _off_crossing(target) < 1.0
+    # 1.5 m past it, in open space: the path direction at the base weight
+    target, gain = ctl._heading_target_and_gain(len(path) - 10, (DOOR_X, 4.55, 0.0), goal, cm)
+    assert gain == 1.0
+    # with the planner's headings the planned yaw rules, at the base weight
+    ctl.set_path(path, np.full(len(path), 0.3))
+    target, gain = ctl._heading_target_and_gain(len(path) // 2 - 12, (DOOR_X, 2.45, 0.0), goal, cm)
+    assert (target, gain) == (pytest.approx(0.3), 1.0)
