@@ -125,8 +125,9 @@ class MppiController(HolonomicController):
         Why a larger weight for the passage yaw (``passage_heading_gain``): at the base weight the samples that
         keep progressing along the path win over those that turn, and the body reached a 1.1 m doorway still
         turning, its long axis 30–50° off square (bench/doorway_crossings.py, random:7: median skew 33°, closest
-        4.5 cm). Weighted up only there, the turn is finished before the jambs; elsewhere following the path
-        keeps its weight."""
+        4.5 cm). Weighted up only there (gain 3: median skew 13°, closest 9.2 cm; over random:1–8, 264 crossings,
+        closest 1.0 → 4.1 cm, median 10.4 → 13.0 cm), the turn is mostly finished before the jambs; elsewhere
+        following the path keeps its weight."""
         th = pose[2]
         if math.hypot(goal[0] - pose[0], goal[1] - pose[1]) < self.cfg.rotate_to_goal_dist:
             return float(goal[2]), 1.0
