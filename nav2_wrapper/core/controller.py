@@ -271,9 +271,9 @@ class HolonomicController:
         """In a narrow passage on the next stretch of path, the heading whose footprint fits it best.
 
         A holonomic base need not face where the path goes next: placed at the tightest path point ahead, the
-        heading (near the path tangent there) with the fewest lethal contacts and least cost is the one that
-        minimises the body's cross-section across the passage; holding it until the passage is behind is what
-        gets a 0.5 m wide robot through a 0.8 m gap or a doorway entered at an angle. None in open space."""
+        heading (near the path tangent there) ranked best by :meth:`_rank_passage_yaws` is the one that keeps the
+        body off the passage's sides; holding it until the passage is behind is what gets a 0.5 m wide robot
+        through a 0.8 m gap or a doorway entered at an angle. None in open space."""
         c = self.cfg
         k = int(np.searchsorted(self._cum, self._cum[i] + c.passage_lookahead)) + 1
         pts = self.path[i:k]
@@ -287,11 +287,44 @@ class HolonomicController:
         tangent = self._path_yaw(max(int(np.searchsorted(self._cum, self._cum[i + j] - self._half_length)), 0),
                                  2 * self._half_length, th, ahead=True)
         yaws = tangent + np.radians(np.arange(-90.0, 91.0, 10.0))  # holonomic: may cross a passage sideways
-        poses = np.column_stack([np.full(len(yaws), pts[j, 0]), np.full(len(yaws), pts[j, 1]), yaws])
+        return float(yaws[self._rank_passage_yaws(yaws, tangent, pts[j], costmap)[0]])
+
+    def _rank_passage_yaws(self, yaws: NDArray[np.float64], tangent: float, centre: NDArray[np.float64],
+                           costmap: Costmap) -> NDArray[np.int64]:
+        """Indices of ``yaws`` best first, for the body centred on ``centre`` (x, y) at each yaw.
+
+        Ranked by, in turn: the lethal cells the outline touches; the body's clearance, its outline's smallest
+        distance to a lethal cell in whole costmap cells (more is better); the summed outline cost; closeness to
+        the path tangent. Why the clearance before the summed cost: the sum counts how much of the outline lies
+        in the inflation, not how close its nearest point comes, and so can prefer a body crossing a 1.1 m doorway
+        sideways or skewed (0.2 m or less from a jamb) to one lined up with the crossing (0.3 m from each); the
+        most room at the closest point is what keeps a lagging body off the jambs. Why a distance transform
+        rather than the largest outline cost: the inflated cost is flat (inscribed) within the inscribed radius,
+        0.25 m, which is just where a doorway's jambs are, so it cannot tell those headings apart. Why whole
+        cells: clearances less than a cell apart are within the rasterisation's error, so such near-ties still go
+        to the summed cost and then the tangent (less turning)."""
+        from scipy.ndimage import distance_transform_edt
+
+        poses = np.column_stack([np.full(len(yaws), centre[0]), np.full(len(yaws), centre[1]), yaws])
         fc = costmap.footprint_costs(poses, self._points, outside=0).astype(float)
         fc[fc == NO_INFORMATION] = 0.0
-        score = 1e4 * (fc == LETHAL).sum(axis=1) + fc.sum(axis=1) + np.abs(yaws - tangent)  # ties → tangent
-        return float(yaws[int(np.argmin(score))])
+        hits = (fc == LETHAL).sum(axis=1)
+        # distance (cells) to the nearest lethal cell, on a window reaching the inflation radius past the outline
+        reach = self.cfg.footprint.circumscribed_radius + costmap.cfg.inflation_radius
+        rows, cols = costmap.shape
+        c0, r0 = (max(int(v), 0) for v in costmap.world_to_cell(centre[0] - reach, centre[1] - reach))
+        c1, r1 = costmap.world_to_cell(centre[0] + reach, centre[1] + reach)
+        c1, r1 = min(int(c1) + 1, cols), min(int(r1) + 1, rows)
+        clearance = np.zeros(len(yaws))
+        lethal = costmap.costs[r0:r1, c0:c1] == LETHAL
+        if lethal.any():
+            dist = distance_transform_edt(~lethal)
+            cs, sn = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+            col, row = costmap.world_to_cell(centre[0] + cs * self._points[None, :, 0] - sn * self._points[None, :, 1],
+                                             centre[1] + sn * self._points[None, :, 0] + cs * self._points[None, :, 1])
+            cells = dist[np.clip(row - r0, 0, r1 - r0 - 1), np.clip(col - c0, 0, c1 - c0 - 1)]
+            clearance = np.floor(cells.min(axis=1) + 1e-9)
+        return np.lexsort((np.abs(yaws - tangent), fc.sum(axis=1), -clearance, hits))
 
     # ---- command selection ---------------------------------------------------------------------------
     def _wz_toward(self, target: float, th: float) -> float:

@@ -140,7 +140,10 @@ def _body_clearance(grid: np.ndarray, poses: list[tuple[float, float, float]]) -
 def test_keeps_body_clearance_entering_a_doorway_at_an_angle(start: tuple[float, float, float]) -> None:
     # a 0.8 m opening entered along a path that bends into it: the centre's cost is the same for a body lined up
     # with the opening and one still turned toward the approach, the corners are not; the clearance critic
-    # keeps them off the jambs when switched on (without it the corner passes within about a centimetre)
+    # keeps them off the jambs when switched on. Without it the corner passed within 3.0 and 4.0 cm of a jamb
+    # while the passage heading was ranked by summed outline cost and weighted like any heading; ranked by the
+    # body's clearance and weighted up (passage_heading_gain), 5.8 and 7.0 cm, and 8.2 and 8.1 cm with the
+    # critic: the default must now keep 4 cm too, and the critic must not lose any of it
     from nav2_wrapper.core.planner import densify
 
     cm, grid = _doorway_costmap(0.8)
@@ -153,5 +156,5 @@ def test_keeps_body_clearance_entering_a_doorway_at_an_angle(start: tuple[float,
         poses, _ = _drive(ctl, cm, start, (7.0, 3.0, 0.0), steps=600)
         assert math.hypot(poses[-1][0] - 7.0, poses[-1][1] - 3.0) < 0.15
         clear[weight] = _body_clearance(grid, poses)
-    assert clear[on] >= 0.04
-    assert clear[on] > clear[0.0] + 0.02
+    assert clear[0.0] >= 0.04
+    assert clear[on] >= clear[0.0]
