@@ -32,7 +32,10 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from demo_scenes import parse_range  # the same seed-list syntax as the demo bench
 
 from hal_panda_mobile.files.scene import load_scene
 from hal_panda_mobile.sim.raster import rasterize
@@ -45,14 +48,6 @@ RES = 0.05
 UPSAMPLE = 5            # clearance raster: RES / UPSAMPLE = 1 cm
 BEFORE, AFTER = 2.5, 2.0
 DOOR_GAP = (1.0, 1.4)   # wall-end gaps (m) taken for doorways (the generator cuts 1.2 m)
-
-
-def parse_range(text: str) -> list[int]:
-    out: list[int] = []
-    for part in text.split(","):
-        lo, sep, hi = part.strip().partition("-")
-        out += list(range(int(lo), int(hi) + 1)) if sep else [int(lo)]
-    return out
 
 
 def doorways(scene) -> list[tuple[float, float, bool]]:
