@@ -305,8 +305,11 @@ class HolonomicController:
         to the summed cost and then the tangent (less turning)."""
         from scipy.ndimage import distance_transform_edt
 
-        poses = np.column_stack([np.full(len(yaws), centre[0]), np.full(len(yaws), centre[1]), yaws])
-        fc = costmap.footprint_costs(poses, self._points, outside=0).astype(float)
+        # the outline's world points per yaw, once: for the costs and for the clearance lookup below
+        cs, sn = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+        px = centre[0] + cs * self._points[None, :, 0] - sn * self._points[None, :, 1]
+        py = centre[1] + sn * self._points[None, :, 0] + cs * self._points[None, :, 1]
+        fc = costmap.cost_at(px, py, outside=0).astype(float)
         fc[fc == NO_INFORMATION] = 0.0
         hits = (fc == LETHAL).sum(axis=1)
         # distance (cells) to the nearest lethal cell, on a window reaching the inflation radius past the outline
@@ -319,9 +322,7 @@ class HolonomicController:
         lethal = costmap.costs[r0:r1, c0:c1] == LETHAL
         if lethal.any():
             dist = distance_transform_edt(~lethal)
-            cs, sn = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
-            col, row = costmap.world_to_cell(centre[0] + cs * self._points[None, :, 0] - sn * self._points[None, :, 1],
-                                             centre[1] + sn * self._points[None, :, 0] + cs * self._points[None, :, 1])
+            col, row = costmap.world_to_cell(px, py)
             cells = dist[np.clip(row - r0, 0, r1 - r0 - 1), np.clip(col - c0, 0, c1 - c0 - 1)]
             clearance = np.floor(cells.min(axis=1) + 1e-9)
         return np.lexsort((np.abs(yaws - tangent), fc.sum(axis=1), -clearance, hits))
