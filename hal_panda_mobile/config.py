@@ -74,6 +74,9 @@ class HalConfig(_Model):
     lidar_noise: LidarNoise | None = None  # None: the robot description's noise_std/dropout_prob
     rates: Rates = Rates()
     real_time_factor: RealTimeFactor = Field(1.0, ge=0, le=MAX_REAL_TIME_FACTOR)  # 0: as fast as possible
+    # sim s the loop may run past the last non-zero /cmd_vel before it waits for the next (0: never waits);
+    # keeps a slow controller tick from becoming a long blind drive at rtf > 1 (see hal_panda_mobile.loop)
+    command_lag_bound_s: float = Field(0.15, ge=0, le=5.0)
     topics: Topics = Topics()
     frames: Frames = Frames()
     use_sim_time: bool = True

@@ -9,6 +9,16 @@ Modes: ``ACTIVE`` steps and publishes at the configured sim-time rates. ``held``
 ACTIVATE and after DEACTIVATE) freezes sim time and republishes the current state (/clock, /odom,
 TF, /scan, ground truth) at ``hold_rate_hz`` of wall time, so consumers can still resolve frames. On
 DEACTIVATE the base is first braked to rest (<= 2 s of sim time, still paced) and /cmd_vel is ignored.
+
+Command lag bound: while the base is executing a non-zero /cmd_vel, the loop does not run more than
+``command_lag_bound_s`` of sim time past that command's arrival; it waits (wall time, at most
+``COMMAND_WAIT_MAX_S`` per command) for the next one. Why: at a real-time factor of 3 every wall millisecond a
+controller tick takes becomes three of sim time, so a tick slowed by a loaded machine (or a long replan) lets
+the base drive blind for far longer than the same controller would on the robot at real time. Measured in a
+``rbnx demo`` on a loaded machine: control ticks of ~1 s of sim time on the first goal, and the contact at a
+door jamb that followed. A real base cannot wait; a simulator can, and should, so that what is measured is
+navigation rather than the machine's load. A controller that stops sending (crashed, paused) costs at most
+``COMMAND_WAIT_MAX_S`` of wall time before the loop runs on and the command's own timeout stops the base.
 """
 
 from __future__ import annotations
@@ -31,6 +41,8 @@ HELD, ACTIVE, BRAKING, STOPPED = "held", "active", "braking", "stopped"
 BRAKE_MAX_S = 2.0  # sim seconds allowed to come to rest on DEACTIVATE
 REST_SPEED = 1e-3  # m/s and rad/s
 LAG_RESET_S = 0.5  # wall seconds behind schedule before the pacing anchor is reset (no catch-up burst)
+COMMAND_WAIT_MAX_S = 0.4  # wall s the loop waits for a follow-up command (under navigation's 0.5 s /clock stall check)
+COMMAND_WAIT_SLICE_S = 0.02  # wall seconds between checks of the mode while waiting for a command
 
 
 @dataclass(frozen=True)
@@ -53,6 +65,10 @@ class LoopStats:
     active_wall_s: float = 0.0
     active_sim_s: float = 0.0
     cmd_ignored: int = 0
+    cmd_waits: int = 0  # times the loop waited for a command newer than command_lag_bound_s of sim time
+    cmd_wait_wall_s: float = 0.0
+    cmd_wait_timeouts: int = 0  # waits that ended after COMMAND_WAIT_MAX_S without a new command
+    cmd_wait_lag_max_s: float = 0.0  # largest sim-time age of the command at which a wait began
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -63,16 +79,26 @@ class LoopStats:
         return {"chunks": self.chunks, "errors": self.errors, "last_error": self.last_error,
                 "lag_resets": self.lag_resets, "active_wall_s": round(self.active_wall_s, 3),
                 "active_sim_s": round(self.active_sim_s, 3), "achieved_rtf": round(self.achieved_rtf, 3),
-                "cmd_ignored": self.cmd_ignored, **self.extra}
+                "cmd_ignored": self.cmd_ignored, "cmd_waits": self.cmd_waits,
+                "cmd_wait_wall_s": round(self.cmd_wait_wall_s, 3), "cmd_wait_timeouts": self.cmd_wait_timeouts,
+                "cmd_wait_lag_max_s": round(self.cmd_wait_lag_max_s, 3),
+                **self.extra}
 
 
 class SimLoop:
     """Owns the simulator and its outputs for one session; ``close()`` stops the thread and the writers."""
 
     def __init__(self, sim: PandaMobileSim, outputs: Outputs, rates: LoopRates, *, real_time_factor: float,
-                 use_sim_time: bool = True) -> None:
+                 use_sim_time: bool = True, command_lag_bound_s: float = 0.0,
+                 command_wait_max_s: float = COMMAND_WAIT_MAX_S) -> None:
         self.sim, self.outputs, self.rates = sim, outputs, rates
         self.rtf = real_time_factor
+        self.command_lag_bound_s = command_lag_bound_s
+        self.command_wait_max_s = command_wait_max_s
+        self._cmd_at = -math.inf  # sim time the last non-zero command arrived (-inf: none is being executed)
+        self._cmd_seq = 0  # counts accepted commands, so a wait knows whether a new one came
+        self._waited_seq = -1  # the command whose wait already timed out (it is not waited for again)
+        self._cmd_arrived = threading.Event()
         self.use_sim_time = use_sim_time
         self.stats = LoopStats()
         self.cleared_at = -1.0  # collisions at or before this sim time were hidden by a reset
@@ -120,6 +146,11 @@ class SimLoop:
     def close(self, reason: str = "") -> None:
         """End of the session: stop the loop, then release the DDS writers."""
         self.stop()
+        st = self.stats
+        if st.cmd_waits:
+            log.info("waited for /cmd_vel %d times (%.1f s of wall time, %d gave up; command lag bound %.2f s of sim "
+                     "time); achieved real-time factor %.2f", st.cmd_waits, st.cmd_wait_wall_s, st.cmd_wait_timeouts,
+                     self.command_lag_bound_s, st.achieved_rtf)
         self.outputs.close()
 
     def call(self, fn: Callable[[PandaMobileSim], T], *, republish: bool = False) -> T:
@@ -138,8 +169,12 @@ class SimLoop:
             if self._mode != ACTIVE:
                 self.stats.cmd_ignored += 1
                 return False
-            self.sim.set_cmd_vel(vx, vy, wz, self.sim.time, vz=vz, wx=wx, wy=wy)
-            return True
+            status = self.sim.set_cmd_vel(vx, vy, wz, self.sim.time, vz=vz, wx=wx, wy=wy)
+            moving = not status.rejected and (status.vx != 0.0 or status.vy != 0.0 or status.wz != 0.0)
+            self._cmd_at = self.sim.time if moving else -math.inf
+            self._cmd_seq += 1
+        self._cmd_arrived.set()
+        return True
 
     # ------------------------------------------------------------------ loop (own thread)
     def _stamp(self, t: float) -> float:
@@ -158,6 +193,10 @@ class SimLoop:
                 if not was_stepping:  # (re)start pacing from here
                     anchor_wall, anchor_sim = time.monotonic(), self.sim.time
                     was_stepping = True
+                if self._command_stale():
+                    self._wait_for_command()
+                    anchor_wall, anchor_sim = time.monotonic(), self.sim.time  # the wait is not lag to catch up
+                    continue
                 t0 = time.monotonic()
                 sim0 = self.sim.time
                 self._step_chunk()
@@ -177,6 +216,36 @@ class SimLoop:
                 self.stats.last_error = f"{type(exc).__name__}: {exc}"
                 log.exception("sim loop iteration failed (%d so far)", self.stats.errors)
                 time.sleep(0.05)
+
+    def _command_stale(self) -> bool:
+        """True while the base executes a non-zero command older than the lag bound (and not already waited on)."""
+        with self._lock:
+            return (self.command_lag_bound_s > 0.0 and self._mode == ACTIVE and self._waited_seq != self._cmd_seq
+                    and self.sim.commanding and self.sim.time - self._cmd_at >= self.command_lag_bound_s)
+
+    def _wait_for_command(self) -> None:
+        """Block stepping until a newer command arrives, the mode changes, or ``command_wait_max_s`` passes."""
+        with self._lock:
+            seq = self._cmd_seq
+            self._cmd_arrived.clear()
+            lag = self.sim.time - self._cmd_at
+        t0 = time.monotonic()
+        self.stats.cmd_waits += 1
+        self.stats.cmd_wait_lag_max_s = max(self.stats.cmd_wait_lag_max_s, lag)
+        while True:
+            self._cmd_arrived.wait(COMMAND_WAIT_SLICE_S)
+            self._cmd_arrived.clear()
+            with self._lock:
+                if self._cmd_seq != seq or self._mode != ACTIVE:
+                    break
+            if time.monotonic() - t0 >= self.command_wait_max_s:
+                with self._lock:
+                    self._waited_seq = seq
+                self.stats.cmd_wait_timeouts += 1
+                log.warning("no new /cmd_vel for %.1f s of wall time (last one %.2f s of sim time ago); "
+                            "running on without waiting for it", self.command_wait_max_s, self.sim.time - self._cmd_at)
+                break
+        self.stats.cmd_wait_wall_s += time.monotonic() - t0
 
     def _hold_once(self) -> None:
         with self._lock:

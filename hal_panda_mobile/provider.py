@@ -87,7 +87,8 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
                           clock=cfg.rates.clock_rate_hz if cfg.publish_clock else None,
                           ground_truth=cfg.rates.ground_truth_rate_hz if cfg.publish_ground_truth else None,
                           hold=cfg.rates.hold_rate_hz)
-        loop = SimLoop(sim, outputs, rates, real_time_factor=cfg.real_time_factor, use_sim_time=cfg.use_sim_time)
+        loop = SimLoop(sim, outputs, rates, real_time_factor=cfg.real_time_factor, use_sim_time=cfg.use_sim_time,
+                       command_lag_bound_s=cfg.command_lag_bound_s)
         outputs.publish_static(robot.lidar.mount, sim.time if cfg.use_sim_time else 0.0)
 
         def on_twist(msg: Twist) -> None:

@@ -212,6 +212,11 @@ class PandaMobileSim:
         self._deadline = deadline
         return CmdStatus(*cmd, clamped=cmd != req, nonplanar_ignored=nonplanar)
 
+    @property
+    def commanding(self) -> bool:
+        """True while a non-zero command is being held (before its timeout)."""
+        return self._deadline is not None and bool(np.any(self.data.ctrl[:3] != 0.0))
+
     def stop(self) -> None:
         """Zero target: the base decelerates at its limits and holds."""
         self.data.ctrl[:3] = 0.0

@@ -74,3 +74,77 @@ def test_paced_rtf_and_deactivate_holds() -> None:
         assert max(abs(v) for v in r.sim.ground_truth()[3:]) < 1e-3
     finally:
         r.stop()
+
+
+def lagged(bound: float, wait_max: float = 60.0) -> SimLoop:
+    """As fast as possible (rtf 0): without the bound the sim would run far past any command. The wait for a
+    follow-up command is long here (60 s) so that a busy machine delaying this test thread cannot end it."""
+    sim = build_sim(parse_config({"scene": "warehouse"}))
+    return SimLoop(sim, FakeOutputs(), LoopRates(odom=50.0, scan=10.0, clock=100.0, ground_truth=10.0, hold=20.0),
+                   real_time_factor=0.0, command_lag_bound_s=bound, command_wait_max_s=wait_max)
+
+
+CHUNK_S = 0.01  # the loop steps to the next due output: /clock at 100 Hz here
+
+
+def test_command_lag_bound_holds_sim_time_until_the_next_command() -> None:
+    r = lagged(0.15)
+    r.start()
+    try:
+        r.activate()
+        wait_until(lambda: r.sim.time > 0.5, 60, "0.5 s of sim time")
+        for _ in range(5):  # a controller slower than the sim: each command comes only once the sim waits
+            waits = r.stats.cmd_waits
+            assert r.cmd_vel(0.3, 0.0, 0.1)
+            wait_until(lambda w=waits: r.stats.cmd_waits > w, 60, "the loop waiting for the next command")
+        assert r.stats.cmd_wait_timeouts == 0
+        # every wait began one chunk or less past the bound, never later: the base never ran out of command
+        assert 0.15 <= r.stats.cmd_wait_lag_max_s <= 0.15 + CHUNK_S + 1e-6
+        assert r.sim.commanding
+    finally:
+        r.stop()
+
+
+def test_a_command_that_is_not_followed_up_stops_being_waited_for() -> None:
+    r = lagged(0.15, wait_max=0.4)
+    r.start()
+    try:
+        r.activate()
+        wait_until(lambda: r.sim.time > 0.2, 60, "0.2 s of sim time")
+        t0 = r.sim.time
+        assert r.cmd_vel(0.3, 0.0, 0.0)
+        wait_until(lambda: r.stats.cmd_wait_timeouts == 1, 60, "the wait for a follow-up command giving up")
+        wait_until(lambda: r.sim.time > t0 + 2.0, 60, "sim time running on")
+        assert r.stats.cmd_waits == 1   # the same command is not waited for twice
+        assert not r.sim.commanding     # its own 0.5 s timeout ended it
+        assert max(abs(v) for v in r.sim.ground_truth()[3:]) < 1e-3
+    finally:
+        r.stop()
+
+
+def test_zero_commands_and_bound_zero_never_wait() -> None:
+    for bound, cmd in ((0.15, (0.0, 0.0, 0.0)), (0.0, (0.3, 0.0, 0.0))):
+        r = lagged(bound)
+        r.start()
+        try:
+            r.activate()
+            assert r.cmd_vel(*cmd)
+            wait_until(lambda r=r: r.sim.time > 2.0, 60, "2 s of sim time")
+            assert r.stats.cmd_waits == 0
+        finally:
+            r.stop()
+
+
+def test_deactivate_ends_a_wait_and_brakes() -> None:
+    r = lagged(0.15)   # the wait would last 60 s: only the mode change can end it
+    r.start()
+    try:
+        r.activate()
+        assert r.cmd_vel(0.3, 0.0, 0.0)
+        wait_until(lambda: r.stats.cmd_waits == 1, 60, "the loop waiting for a follow-up command")
+        r.deactivate()
+        wait_until(lambda: r.mode == "held", 60, "hold after braking")
+        assert r.stats.cmd_wait_timeouts == 0
+        assert max(abs(v) for v in r.sim.ground_truth()[3:]) < 1e-3
+    finally:
+        r.stop()
