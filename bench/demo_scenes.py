@@ -110,6 +110,11 @@ def reduce_summary(s: dict[str, Any]) -> dict[str, Any]:
         # the true body's closest approach to the true obstacles over the demo (robonix_eval/clearance.py)
         "min_clearance_m": min((g["closest"]["clearance_m"] for g in goals if g.get("closest")), default=None),
         "sim_s": round(sum(g.get("duration_sim_s") or 0.0 for g in goals), 1),
+        # how far the machine's load shaped the run: the simulator's achieved real-time factor and its waits
+        # for a /cmd_vel later than command_lag_bound_s (hal_panda_mobile/loop.py)
+        "achieved_rtf": (s.get("sim_loop") or {}).get("achieved_rtf"),
+        "cmd_waits": (s.get("sim_loop") or {}).get("cmd_waits"),
+        "cmd_wait_timeouts": (s.get("sim_loop") or {}).get("cmd_wait_timeouts"),
         "outcomes": [{"name": g.get("name"), "state": g.get("state"), "contacts": g.get("collision_count", 0),
                       "detail": g.get("detail", ""), "failure": g.get("failure", ""),
                       "closest": g.get("closest"), "collisions": g.get("collisions", [])} for g in goals],
@@ -139,6 +144,11 @@ def print_table(rows: list[dict[str, Any]]) -> None:
     print(f"{sum(r['goals_succeeded'] for r in ran)}/{sum(r['goals_planned'] for r in ran)} goals succeeded, "
           f"{sum(r['contacts'] for r in ran)} contacts, {sum(r['status'] == 'ok' for r in ran)}/{len(ran)} demos "
           f"clean, {len(rows) - len(ran)} refused", flush=True)
+    rtfs = sorted(r["achieved_rtf"] for r in ran if r.get("achieved_rtf") is not None)
+    if rtfs:
+        print(f"simulator: achieved real-time factor {rtfs[0]:.2f}–{rtfs[-1]:.2f}; waited for a late /cmd_vel "
+              f"{sum(r.get('cmd_waits') or 0 for r in ran)} times ({sum(r.get('cmd_wait_timeouts') or 0 for r in ran)} "
+              "gave up after 0.4 s of wall time)", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:

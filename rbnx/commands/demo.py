@@ -285,6 +285,17 @@ def _clearance_field(scene: str, sim_name: str | None, rec: Recorder) -> Any:
     return field
 
 
+def _note_sim_loop(rpc: DemoRpc, summary: dict[str, Any]) -> None:
+    """The simulator's loop figures (achieved real-time factor, waits for a late /cmd_vel) into the summary and
+    one line: they say how far the machine's load shaped the run."""
+    try:
+        loop = rpc.scene_info().get("loop") or {}
+    except Exception as exc:  # a figure of the report, never a reason to fail the demo
+        print(f"warning: simulator loop figures not read: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return
+    summary["sim_loop"] = loop
+
+
 def _finish(code: int, stop: _Stop, boot: BootChild, rpc: DemoRpc | None, rec: Recorder | None,
             results: list[GoalResult], goals: list[Goal], summary: dict[str, Any], out: Path,
             t_start: float) -> int:
@@ -303,6 +314,8 @@ def _finish(code: int, stop: _Stop, boot: BootChild, rpc: DemoRpc | None, rec: R
             summary.pop("map_png", None)
             rec.warnings.append(f"map.png: {exc}")
             print(f"warning: map.png not written: {exc}", file=sys.stderr)
+    if rpc is not None and boot.running():
+        _note_sim_loop(rpc, summary)
     if rec is not None:
         rec.stop()
         summary["warnings"] = rec.warnings
@@ -315,6 +328,10 @@ def _finish(code: int, stop: _Stop, boot: BootChild, rpc: DemoRpc | None, rec: R
     if results:
         print()
         print_table(results, len(goals))
+    loop = summary.get("sim_loop") or {}
+    if "achieved_rtf" in loop:
+        print(f"simulator: achieved real-time factor {loop['achieved_rtf']:.2f}; waited for a late /cmd_vel "
+              f"{loop.get('cmd_waits', 0)} time(s), {loop.get('cmd_wait_wall_s', 0.0):.1f} s of wall time", flush=True)
     print("shutting down…", flush=True)
     leftovers = boot.stop()
     summary["wall_s"] = round(time.monotonic() - t_start, 2)
