@@ -43,6 +43,7 @@ REST_SPEED = 1e-3  # m/s and rad/s
 LAG_RESET_S = 0.5  # wall seconds behind schedule before the pacing anchor is reset (no catch-up burst)
 COMMAND_WAIT_MAX_S = 0.4  # wall s the loop waits for a follow-up command (under navigation's 0.5 s /clock stall check)
 COMMAND_WAIT_SLICE_S = 0.02  # wall seconds between checks of the mode while waiting for a command
+WAIT_WARN_EVERY_S = 10.0  # wall seconds between warnings that a wait for a command gave up
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,7 @@ class SimLoop:
         self._cmd_seq = 0  # counts accepted commands, so a wait knows whether a new one came
         self._waited_seq = -1  # the command whose wait already timed out (it is not waited for again)
         self._cmd_arrived = threading.Event()
+        self._wait_warned_until = 0.0  # monotonic time before which a wait that gives up is not logged again
         self.use_sim_time = use_sim_time
         self.stats = LoopStats()
         self.cleared_at = -1.0  # collisions at or before this sim time were hidden by a reset
@@ -242,8 +244,11 @@ class SimLoop:
                 with self._lock:
                     self._waited_seq = seq
                 self.stats.cmd_wait_timeouts += 1
-                log.warning("no new /cmd_vel for %.1f s of wall time (last one %.2f s of sim time ago); "
-                            "running on without waiting for it", self.command_wait_max_s, self.sim.time - self._cmd_at)
+                if time.monotonic() >= self._wait_warned_until:   # a slow publisher would warn on every command
+                    self._wait_warned_until = time.monotonic() + WAIT_WARN_EVERY_S
+                    log.warning("no new /cmd_vel for %.1f s of wall time (last one %.2f s of sim time ago); running on "
+                                "without waiting for it (%d time(s) so far)", self.command_wait_max_s,
+                                self.sim.time - self._cmd_at, self.stats.cmd_wait_timeouts)
                 break
         waited = time.monotonic() - t0
         self.stats.cmd_wait_wall_s += waited
