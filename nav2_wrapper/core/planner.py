@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from robonix_common.params import param
 
-from . import _search
+from . import _jump, _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
@@ -24,6 +24,12 @@ from .se2_planner import Se2PlannerConfig
 # re-opened so many cells that it expanded more than FIFO; 1/16 with LIFO beat 1.0 with FIFO by 7-17 % total
 # time on all six bench settings (38 % fewer expansions on 10 % near pairs), 1/32 and 1/64 no better.
 BUCKET_WIDTH = 1.0 / 16
+# The cost-optimal kernel: "jumps" scans through uniform cost-0 regions (_jump), "buckets" files every cell
+# (_search.astar_buckets). Same cost; see the README's planner section for the measured comparison.
+DEFAULT_KERNEL = "jumps"
+# Longest scan (cells) before a cell is filed anyway: bounds how far one entry's f can rise above its parent's,
+# which sizes the bucket ring (16: 2048 buckets).
+JUMP_CAP = 16
 
 
 @dataclass
@@ -66,14 +72,20 @@ class _Search:
         self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
         self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
 
-    def ring_size(self, width: float) -> int:
-        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale."""
+    def ring_size(self, width: float, rise: float = 0.0) -> int:
+        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale, one
+        filed scan end by at most ``rise``."""
         finite = self.table[np.isfinite(self.table)]
         step = math.sqrt(2.0) * (max(float(finite.max()) if len(finite) else 1.0, self.esc_cost) + self.h_scale)
-        return 1 << max(3, int(math.ceil(math.log2(step / width + 3))))
+        return 1 << max(3, int(math.ceil(math.log2(max(step, rise) / width + 3))))
 
-    def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
+    def forward_path(self, stamp: int, cell: int, parent: NDArray[np.int32] | None = None,
+                     ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them
+        (``parent``: the jumping search's, whose scanned-past cells have no record)."""
+        if parent is not None:
+            return _jump.backtrack_jumps(self.costs, self.table, self.rec, parent, stamp, self.start, cell,
+                                         self.esc_r2, self.esc_cost)
         cells = _search.backtrack(self.costs, self.table, self.rec, stamp, self.start, cell, self.esc_r2,
                                   self.esc_cost)
         return cells, self.rec.view(np.float32)[2 * cells + 1].astype(np.float64)
@@ -86,6 +98,8 @@ class GlobalPlanner:
         self.cfg = cfg or PlannerConfig()
         self._size = 0
         self._stamp = 0
+        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel ("jumps" or "buckets")
+        self.scanned = 0                    # cells the last jumping search scanned past (bench figure)
 
     def traversal_table(self) -> NDArray[np.float64]:
         c = self.cfg
@@ -99,6 +113,7 @@ class GlobalPlanner:
         """An 8-byte search record per cell (see ``_search``), reused between plans via stamps."""
         if n != self._size:
             self._rec = np.zeros(2 * n, np.int32)
+            self._parent = np.empty(n, np.int32)     # jumping search: written where a scan files a cell
             self._size, self._stamp = n, 0
         self._next_stamp()
 
@@ -157,6 +172,18 @@ class GlobalPlanner:
     def _search(self, search: _Search, target: int) -> tuple[NDArray | None, NDArray, int]:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
+        self.scanned = 0
+        if self.cfg.heuristic_weight == 1.0 and self.kernel == "jumps":
+            found, expansions, self.scanned = _jump.astar_jumps(
+                search.costs, search.table, search.start, target, self._rec, self._parent, self._stamp,
+                search.esc_r2, search.esc_cost, search.h_scale, BUCKET_WIDTH,
+                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(JUMP_CAP, float(search.table[0]), search.h_scale)),
+                JUMP_CAP)
+            if found:
+                cells, gvals = search.forward_path(self._stamp, target, self._parent)
+                return cells, gvals, expansions
+            # Scanned-past cells are not closed: the caller's fallback wants the start's closed component.
+            self._next_stamp()
         if self.cfg.heuristic_weight == 1.0:
             found, expansions = _search.astar_buckets(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
