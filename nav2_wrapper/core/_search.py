@@ -7,8 +7,9 @@ the first process on a machine pays the compile time.
 Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation reads and
 writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is
 64·stamp + 2·move + closed for the plan with that stamp (``STATE_SHIFT``; move 0-7 is the move that last gave
-the cell its g, 8 none, which the bucket kernel's pruning reads; 16 + move marks a g set by a jump, see ``_jump``), so the buffer is reused between plans without
-clearing. No parent array: ``backtrack`` walks the g values back. The open list is a 4-ary heap of single
+the cell its g, 8 none, which the bucket kernel's pruning reads; 16 + move marks a g set by a scan, see
+``_jump``), so the buffer is reused between plans without clearing. No parent array: ``backtrack`` walks the
+g values back (``_jump``'s scans need one for the cells they file). The open list is a 4-ary heap of single
 int64 entries (f as float32 bits above the cell index): a heap move is one 8-byte copy, and a pop sifts
 down half as many levels as in a binary heap.
 """
