@@ -17,6 +17,11 @@ we cost moves, must never be cheaper than ours (ours is optimal in that model), 
 Reports median/p95/max plan time per density and setting (wall clock, and the planning thread's CPU
 time, which a loaded machine inflates far less), our time / peer time, expansions, the load average at
 start and end, and the controller's compute time per step. Writes bench/results/planner.json.
+
+``--ab`` compares the cost-optimal kernels instead (no peer, no controller): each pair is planned by the
+jumping kernel and by the plain bucket kernel back to back (order alternating per pair), and per kernel the
+CPU time, queue pops (expansions) and cells scanned past are reported, plus their paired CPU ratio and a
+check that both found the same cost. Writes bench/results/planner_ab.json.
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from nav2_wrapper.core import (
     HolonomicController,
     PlannerConfig,
 )
+from nav2_wrapper.core import planner as planner_module
 from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
@@ -51,6 +57,8 @@ Cell = tuple[int, int]
 RES = 0.05
 SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distance ranges, m
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
+OUT_AB = OUT.with_name("planner_ab.json")
+KERNELS = ("jumps", "buckets")
 
 
 def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
@@ -163,6 +171,33 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     return row
 
 
+def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) -> dict:
+    """Each pair planned by both cost-optimal kernels back to back, alternating which goes first."""
+    cpu: dict[str, list[float]] = {k: [] for k in KERNELS}
+    pops: dict[str, list[int]] = {k: [] for k in KERNELS}
+    scanned: list[int] = []
+    ratio, cost_mismatch = [], 0
+    for i, (s, g) in enumerate(pairs):
+        costs = {}
+        for kernel in KERNELS if i % 2 == 0 else KERNELS[::-1]:
+            planner.kernel = kernel
+            c0 = time.thread_time()
+            r = planner.plan(cm, world(cm, s), world(cm, g))
+            cpu[kernel].append((time.thread_time() - c0) * 1e3)
+            pops[kernel].append(r.expansions)
+            costs[kernel] = r.cost if r.ok else math.inf
+            if kernel == "jumps":
+                scanned.append(planner.scanned)
+        ratio.append(cpu["jumps"][-1] / max(cpu["buckets"][-1], 1e-6))
+        cost_mismatch += not math.isclose(costs["jumps"], costs["buckets"], rel_tol=1e-5)
+    planner.kernel = KERNELS[0]
+    row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k]))} for k in KERNELS}
+    row["jumps"]["scanned_median"] = int(np.median(scanned))
+    row["jumps_over_buckets_cpu_median_of_ratios"] = round(float(np.median(ratio)), 3)
+    row["cost_mismatches"] = cost_mismatch
+    return row
+
+
 def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float],
                           steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
@@ -197,7 +232,12 @@ def main() -> None:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
     ap.add_argument("--no-peer", action="store_true", help="skip pyastar2d")
+    ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (jumps vs buckets)")
+    ap.add_argument("--jump-cap", type=int, help="override planner.JUMP_CAP (experiments)")
+    ap.add_argument("--jump-reach", type=float, help="override planner.JUMP_REACH (experiments)")
     args = ap.parse_args()
+    if args.ab:
+        args.no_peer = True
     try:
         import pyastar2d  # noqa: F401
         use_peer = not args.no_peer
@@ -215,7 +255,10 @@ def main() -> None:
     t_compile = time.perf_counter()
     warm = Costmap(CostmapConfig(obstacle_layer=False, footprint=fp))
     warm.set_static_map(GridMap(np.zeros((50, 50), np.int8), RES))
-    planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
+    for kernel in KERNELS:       # both cost-optimal kernels, so neither pays its compile in the first pair
+        planner.kernel = kernel
+        planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
+    planner.kernel = planner_module.DEFAULT_KERNEL
     results["first_call_s"] = round(time.perf_counter() - t_compile, 3)
     print(f"numba first call (cache load/compile): {results['first_call_s']:.2f} s")
     ctrl_times: list[float] = []
@@ -231,6 +274,15 @@ def main() -> None:
         row: dict = {"obstacle_density": round(float((grid.data == 100).mean()), 3)}
         for name in args.settings:
             pairs = pick_pairs(cm, args.pairs, rng, *SETTINGS[name])
+            if args.ab:
+                r = row[name] = run_ab(cm, planner, pairs)
+                j, b = r["jumps"], r["buckets"]
+                print(f"density {row['obstacle_density']:.2f} {name:4s}: CPU ms median/p95 jumps "
+                      f"{j['cpu_ms']['median']:.2f}/{j['cpu_ms']['p95']:.2f}, buckets {b['cpu_ms']['median']:.2f}/"
+                      f"{b['cpu_ms']['p95']:.2f} | paired ratio median {r['jumps_over_buckets_cpu_median_of_ratios']}"
+                      f" | pops median jumps {j['pops_median']} (+{j['scanned_median']} scanned past), buckets "
+                      f"{b['pops_median']} | cost mismatches {r['cost_mismatches']}", flush=True)
+                continue
             r = row[name] = run_setting(cm, planner, peer, pairs)
             line = (f"density {row['obstacle_density']:.2f} {name:4s}: ours median {r['ours_ms']['median']:.1f} ms, "
                     f"p95 {r['ours_ms']['p95']:.1f}, max {r['ours_ms']['max']:.1f} "
@@ -247,9 +299,16 @@ def main() -> None:
                          f"{r['peer_paths_squeezing_diagonally']} squeezing")
             print(line, flush=True)
         results["densities"][f"{dens:.2f}"] = row
+        if args.ab:
+            continue
         s, g = pick_pairs(cm, 1, rng, *SETTINGS["far"])[0]
         ctrl_times += controller_step_times(cm, planner.plan(cm, world(cm, s), world(cm, g)).path, world(cm, g))
     results["load_avg_at_end"] = os.getloadavg()[0]
+    if args.ab:
+        OUT_AB.parent.mkdir(parents=True, exist_ok=True)
+        OUT_AB.write_text(json.dumps(results, indent=2) + "\n")
+        print(f"load average {results['load_avg_at_start']:.1f} -> {results['load_avg_at_end']:.1f}; wrote {OUT_AB}")
+        return
     cms = np.array(ctrl_times) * 1e3
     results["controller_ms_median"] = round(float(np.median(cms)), 3)
     results["controller_ms_p95"] = round(float(np.percentile(cms, 95)), 3)

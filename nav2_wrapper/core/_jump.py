@@ -49,10 +49,11 @@ _FOUND = 1
 _EXHAUSTED = 0
 
 
-def jump_rise(cap: int, w0: float, h_scale: float) -> float:
-    """Largest f increase of one filed entry over its parent: at most ``cap`` diagonal plus ``cap`` straight
-    steps of factor ``w0``, while h can grow by at most h_scale per unit length (sizes the bucket ring)."""
-    return (SQRT2 + 1.0) * cap * (w0 + h_scale)
+def jump_rise(cap: int, reach: float, w0: float, h_scale: float) -> float:
+    """Largest f increase of one filed entry over its parent (sizes the bucket ring): scans stop once past f +
+    ``reach``, so one step beyond that (a step of factor ``w0`` raises f by at most √2·(w0 + h_scale)), and
+    they are at most ``cap`` diagonal plus ``cap`` straight steps long."""
+    return min((SQRT2 + 1.0) * cap, reach + SQRT2) * (w0 + h_scale)
 
 
 @njit(cache=True, inline="always")
@@ -84,25 +85,30 @@ def _limit(r, c, dr, dc, rows, cols, cap):
 
 
 @njit(cache=True, inline="always")
-def _run(flat, y, o, p, n, goal):
-    """Steps (1..n) a straight scan from uniform cell ``y`` along flat offset ``o`` takes to the first cell that
-    is to be filed: the goal, a cell whose 3×3 block is not all cost 0 (its new line, ``p`` the perpendicular
-    offset, has a non-zero cell) or the n-th."""
+def _run(flat, y, o, p, n, goal, g0, w0, r, c, dr, dc, gr, gc, h_scale, flim):
+    """Steps (1..n) a straight scan from uniform cell ``y`` = (r, c) at g ``g0`` along flat offset ``o`` = (dr, dc)
+    takes to the first cell that is to be filed: the goal, a cell whose 3×3 block is not all cost 0 (its new
+    line, ``p`` the perpendicular offset, has a non-zero cell), a cell whose f exceeds ``flim``, or the n-th."""
     s = 1
     while s < n:
         y1 = y + s * o
         if y1 == goal or not _zero3(flat, y1 + o, p):
+            return s
+        if g0 + s * w0 + h_scale * _octile(r + s * dr, c + s * dc, gr, gc) > flim:
             return s
         s += 1
     return n
 
 
 @njit(cache=True, inline="always")
-def _jump_to(rec, recg, parent, k, nb, ng, origin, seen, nr, nc, gr, gc, h_scale, inv, cb, mask, buckets, counts):
+def _jump_to(rec, recg, parent, k, nb, ng, origin, seen, nr, nc, goal, gr, gc, h_scale, inv, cb, mask, buckets,
+             counts):
     """File cell ``nb`` = (nr, nc) reached from filed cell ``origin`` by a scan ending in move ``k`` at g =
     ``ng``, if that improves its g. Returns (entries filed, that bucket's length)."""
     if rec[_u(2 * nb)] >= seen and not ng < np.float64(recg[_u(2 * nb + 1)]):
         return 0, 0
+    if nb != goal and _past_goal(rec, recg, seen, goal, ng + h_scale * _octile(nr, nc, gr, gc)):
+        return 0, 0             # no cheaper path to the goal through it (popped, it would be closed unexpanded)
     parent[_u(nb)] = origin
     key = _relax(rec, recg, JUMP + k, nb, ng, seen, nr, nc, gr, gc, h_scale, inv, cb, mask)
     if key < 0:
@@ -110,23 +116,23 @@ def _jump_to(rec, recg, parent, k, nb, ng, origin, seen, nr, nc, gr, gc, h_scale
     return 1, _file(buckets, counts, key, nb)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, parent, seen, gr, gc, h_scale, inv, cb, mask,
-          buckets, counts, cap, tally):
+          buckets, counts, cap, flim):
     """Expand uniform cell ``cur`` reached by move ``d`` (0-7) by scanning: straight ahead after a straight
     arrival; after a diagonal one, along the diagonal and, from every cell it passes, along its two straight
     components. Each scan files only the cell it ends on (``_run``); the diagonal one stops at the first
-    non-uniform cell, the goal or after ``cap`` steps. Cells passed are added to ``tally[0]``. Returns
-    (entries filed, the longest bucket after)."""
+    non-uniform cell, the goal, past f = ``flim`` or after ``cap`` steps. Returns (entries filed, the longest
+    bucket after, cells passed). Inlined, and the count returned rather than kept in an array: an array
+    passed to or made in the loop's function costs numba reference counting on every call."""
     dr, dc = _mdr(d), _mdc(d)
     added = most = 0
     if d < 4:
         n = _limit(r, c, dr, dc, rows, cols, cap)
         o = dr * cols + dc
-        s = _run(flat, cur, o, cols if dr == 0 else 1, n, goal)
-        tally[0] += s - 1
-        a, m = _jump_to(rec, recg, parent, d, cur + s * o, gcur + s * w0, cur, seen, r + s * dr, c + s * dc, gr,
-                        gc, h_scale, inv, cb, mask, buckets, counts)
+        s = _run(flat, cur, o, cols if dr == 0 else 1, n, goal, gcur, w0, r, c, dr, dc, gr, gc, h_scale, flim)
+        a, m = _jump_to(rec, recg, parent, d, cur + s * o, gcur + s * w0, cur, seen, r + s * dr, c + s * dc, goal,
+                        gr, gc, h_scale, inv, cb, mask, buckets, counts)
         return a, m
     kv = 1 if dr > 0 else 0
     kh = 3 if dc > 0 else 2
@@ -134,33 +140,36 @@ def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, parent, see
     z, zr, zc, gz = cur, r, c, gcur
     nd = _limit(r, c, dr, dc, rows, cols, cap)
     i = 0
+    passed = 0
     while True:
         # z is uniform: its successors are the two straight components and the diagonal
         n = _limit(zr, zc, dr, 0, rows, cols, cap)
-        s = _run(flat, z, ov, 1, n, goal)
-        a, m = _jump_to(rec, recg, parent, kv, z + s * ov, gz + s * w0, cur, seen, zr + s * dr, zc, gr, gc, h_scale,
-                        inv, cb, mask, buckets, counts)
+        s = _run(flat, z, ov, 1, n, goal, gz, w0, zr, zc, dr, 0, gr, gc, h_scale, flim)
+        a, m = _jump_to(rec, recg, parent, kv, z + s * ov, gz + s * w0, cur, seen, zr + s * dr, zc, goal, gr, gc,
+                        h_scale, inv, cb, mask, buckets, counts)
         added += a
         most = max(most, m)
         n = _limit(zr, zc, 0, dc, rows, cols, cap)
-        t = _run(flat, z, dc, cols, n, goal)
-        a, m = _jump_to(rec, recg, parent, kh, z + t * dc, gz + t * w0, cur, seen, zr, zc + t * dc, gr, gc, h_scale,
-                        inv, cb, mask, buckets, counts)
+        t = _run(flat, z, dc, cols, n, goal, gz, w0, zr, zc, 0, dc, gr, gc, h_scale, flim)
+        a, m = _jump_to(rec, recg, parent, kh, z + t * dc, gz + t * w0, cur, seen, zr, zc + t * dc, goal, gr, gc,
+                        h_scale, inv, cb, mask, buckets, counts)
         added += a
         most = max(most, m)
-        tally[0] += s + t - 2
+        passed += s + t - 2
         i += 1
         z, zr, zc, gz = z + ov + dc, zr + dr, zc + dc, gz + SQRT2 * w0
-        if i >= nd or z == goal or not _uniform(flat, z, cols):
+        if (i >= nd or z == goal or not _uniform(flat, z, cols)
+                or gz + h_scale * _octile(zr, zc, gr, gc) > flim):
             break
-        tally[0] += 1
-    a, m = _jump_to(rec, recg, parent, d, z, gz, cur, seen, zr, zc, gr, gc, h_scale, inv, cb, mask, buckets,
+        passed += 1
+    a, m = _jump_to(rec, recg, parent, d, z, gz, cur, seen, zr, zc, goal, gr, gc, h_scale, inv, cb, mask, buckets,
                     counts)
-    return added + a, max(most, m)
+    return added + a, max(most, m), passed
 
 
 @njit(cache=True)
-def astar_jumps(costs, table, start, goal, rec, parent, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets, cap):
+def astar_jumps(costs, table, start, goal, rec, parent, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets, cap,
+                reach):
     """``_search.astar_buckets`` with scans through uniform cost-0 regions (see the module doc). Same record
     layout, plus ``parent`` (int32 per cell, written only for cells a scan files). ``nbuckets`` must cover
     ``jump_rise(cap, ...)``. Returns (found, expansions, cells scanned past). On failure the cells a scan
@@ -185,7 +194,7 @@ def astar_jumps(costs, table, start, goal, rec, parent, stamp, esc_r2, esc_cost,
     burst = 2 * cap + 8        # the most entries one expansion can file
     while True:
         status = _expand_jumps(costs.ravel(), rows, cols, table, goal, rec, recg, parent, seen, esc_r2, esc_cost,
-                               h_scale, delta, start, buckets, counts, state, drs, dcs, cap, burst)
+                               h_scale, delta, start, buckets, counts, state, drs, dcs, cap, reach, burst)
         if status != _NEED_ROOM:
             return status == _FOUND, state[3], state[4]
         buckets = _room(buckets, state[2] + burst)
@@ -193,7 +202,7 @@ def astar_jumps(costs, table, start, goal, rec, parent, stamp, esc_r2, esc_cost,
 
 @njit(cache=True)
 def _expand_jumps(flat, rows, cols, table, goal, rec, recg, parent, seen, esc_r2, esc_cost, h_scale, delta,  # noqa: C901
-                  start, buckets, counts, state, drs, dcs, cap, burst):
+                  start, buckets, counts, state, drs, dcs, cap, reach, burst):
     """``_search._expand`` plus the scan branch: a popped uniform cell (not the goal, reached by a move) is
     expanded by ``_scan``; any other cell as there, a filed one pruned by the move that ended its scan."""
     sr, sc = start // cols, start % cols
@@ -203,13 +212,13 @@ def _expand_jumps(flat, rows, cols, table, goal, rec, recg, parent, seen, esc_r2
     room = buckets.shape[1] - burst
     w0 = table[0]
     cb, pending, fullest, expansions = state[0], state[1], state[2], state[3]
-    tally = state[4:5]
+    scanned = state[4]
     far = int(np.sqrt(max(esc_r2, 0.0))) + 2
     while pending > 0:
         b = cb & mask
         while counts[b] > 0:
             if fullest > room:
-                state[0], state[1], state[2], state[3] = cb, pending, fullest, expansions
+                state[0], state[1], state[2], state[3], state[4] = cb, pending, fullest, expansions, scanned
                 return _NEED_ROOM
             counts[b] -= 1
             cur = buckets[_u(b), _u(counts[b])]
@@ -224,8 +233,10 @@ def _expand_jumps(flat, rows, cols, table, goal, rec, recg, parent, seen, esc_r2
             if d >= JUMP:
                 d -= JUMP
             if d < 8 and cur != goal and 0 < r < rows - 1 and 0 < c < cols - 1 and _uniform(flat, cur, cols):
-                added, most = _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, parent, seen, gr, gc,
-                                    h_scale, inv, cb, mask, buckets, counts, cap, tally)
+                added, most, passed = _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, parent, seen,
+                                            gr, gc, h_scale, inv, cb, mask, buckets, counts, cap,
+                                            gcur + h_scale * _octile(r, c, gr, gc) + reach)
+                scanned += passed
             elif _interior(r, c, rows, cols, sr, sc, far):
                 if d == 0:
                     added, most = _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
@@ -260,10 +271,10 @@ def _expand_jumps(flat, rows, cols, table, goal, rec, recg, parent, seen, esc_r2
             pending += added
             fullest = max(fullest, most)
         if _past_goal(rec, recg, seen, goal, (cb + 1) * delta):
-            state[3] = expansions
+            state[3], state[4] = expansions, scanned
             return _FOUND
         cb += 1
-    state[3] = expansions
+    state[3], state[4] = expansions, scanned
     return _EXHAUSTED
 
 

@@ -27,9 +27,11 @@ BUCKET_WIDTH = 1.0 / 16
 # The cost-optimal kernel: "jumps" scans through uniform cost-0 regions (_jump), "buckets" files every cell
 # (_search.astar_buckets). Same cost; see the README's planner section for the measured comparison.
 DEFAULT_KERNEL = "jumps"
-# Longest scan (cells) before a cell is filed anyway: bounds how far one entry's f can rise above its parent's,
-# which sizes the bucket ring (16: 2048 buckets).
+# Longest scan (cells) before a cell is filed anyway, and how far past the scanning cell's f a scan goes before
+# it files the cell it is on (a scan away from the goal raises f by up to 2 per cell: without this it runs
+# into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
 JUMP_CAP = 16
+JUMP_REACH = 4.0
 
 
 @dataclass
@@ -177,8 +179,9 @@ class GlobalPlanner:
             found, expansions, self.scanned = _jump.astar_jumps(
                 search.costs, search.table, search.start, target, self._rec, self._parent, self._stamp,
                 search.esc_r2, search.esc_cost, search.h_scale, BUCKET_WIDTH,
-                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(JUMP_CAP, float(search.table[0]), search.h_scale)),
-                JUMP_CAP)
+                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(JUMP_CAP, JUMP_REACH, float(search.table[0]),
+                                                               search.h_scale)),
+                JUMP_CAP, JUMP_REACH)
             if found:
                 cells, gvals = search.forward_path(self._stamp, target, self._parent)
                 return cells, gvals, expansions
