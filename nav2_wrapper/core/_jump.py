@@ -133,7 +133,7 @@ def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, parent, see
         s = _run(flat, cur, o, cols if dr == 0 else 1, n, goal, gcur, w0, r, c, dr, dc, gr, gc, h_scale, flim)
         a, m = _jump_to(rec, recg, parent, d, cur + s * o, gcur + s * w0, cur, seen, r + s * dr, c + s * dc, goal,
                         gr, gc, h_scale, inv, cb, mask, buckets, counts)
-        return a, m
+        return a, m, s - 1
     kv = 1 if dr > 0 else 0
     kh = 3 if dc > 0 else 2
     ov = dr * cols
