@@ -58,7 +58,7 @@ RES = 0.05
 SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distance ranges, m
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
 OUT_AB = OUT.with_name("planner_ab.json")
-KERNELS = ("jumps", "buckets")
+KERNELS = ("chains", "jumps", "buckets")
 
 
 def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
@@ -175,8 +175,9 @@ def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) 
     """Each pair planned by both cost-optimal kernels back to back, alternating which goes first."""
     cpu: dict[str, list[float]] = {k: [] for k in KERNELS}
     pops: dict[str, list[int]] = {k: [] for k in KERNELS}
-    scanned: list[int] = []
-    ratio, cost_mismatch = [], 0
+    scanned: dict[str, list[int]] = {k: [] for k in KERNELS}
+    ratio: dict[str, list[float]] = {k: [] for k in KERNELS}
+    cost_mismatch = 0
     for i, (s, g) in enumerate(pairs):
         costs = {}
         for kernel in KERNELS if i % 2 == 0 else KERNELS[::-1]:
@@ -185,15 +186,16 @@ def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) 
             r = planner.plan(cm, world(cm, s), world(cm, g))
             cpu[kernel].append((time.thread_time() - c0) * 1e3)
             pops[kernel].append(r.expansions)
+            scanned[kernel].append(planner.scanned)
             costs[kernel] = r.cost if r.ok else math.inf
-            if kernel == "jumps":
-                scanned.append(planner.scanned)
-        ratio.append(cpu["jumps"][-1] / max(cpu["buckets"][-1], 1e-6))
-        cost_mismatch += not math.isclose(costs["jumps"], costs["buckets"], rel_tol=1e-5)
-    planner.kernel = KERNELS[0]
-    row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k]))} for k in KERNELS}
-    row["jumps"]["scanned_median"] = int(np.median(scanned))
-    row["jumps_over_buckets_cpu_median_of_ratios"] = round(float(np.median(ratio)), 3)
+        for k in KERNELS:
+            ratio[k].append(cpu[k][-1] / max(cpu["buckets"][-1], 1e-6))
+        cost_mismatch += any(not math.isclose(costs[k], costs["buckets"], rel_tol=1e-5) for k in KERNELS)
+    planner.kernel = planner_module.DEFAULT_KERNEL
+    row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k])),
+                     "scanned_median": int(np.median(scanned[k])),
+                     "cpu_over_buckets_median_of_paired_ratios": round(float(np.median(ratio[k])), 3)}
+                 for k in KERNELS}
     row["cost_mismatches"] = cost_mismatch
     return row
 
@@ -276,12 +278,11 @@ def main() -> None:
             pairs = pick_pairs(cm, args.pairs, rng, *SETTINGS[name])
             if args.ab:
                 r = row[name] = run_ab(cm, planner, pairs)
-                j, b = r["jumps"], r["buckets"]
-                print(f"density {row['obstacle_density']:.2f} {name:4s}: CPU ms median/p95 jumps "
-                      f"{j['cpu_ms']['median']:.2f}/{j['cpu_ms']['p95']:.2f}, buckets {b['cpu_ms']['median']:.2f}/"
-                      f"{b['cpu_ms']['p95']:.2f} | paired ratio median {r['jumps_over_buckets_cpu_median_of_ratios']}"
-                      f" | pops median jumps {j['pops_median']} (+{j['scanned_median']} scanned past), buckets "
-                      f"{b['pops_median']} | cost mismatches {r['cost_mismatches']}", flush=True)
+                print(f"density {row['obstacle_density']:.2f} {name:4s}: " + " | ".join(
+                    f"{k} CPU ms median {r[k]['cpu_ms']['median']:.2f} p95 {r[k]['cpu_ms']['p95']:.2f} "
+                    f"(x{r[k]['cpu_over_buckets_median_of_paired_ratios']} buckets, paired), pops "
+                    f"{r[k]['pops_median']}, scanned {r[k]['scanned_median']}" for k in KERNELS)
+                    + f" | cost mismatches {r['cost_mismatches']}", flush=True)
                 continue
             r = row[name] = run_setting(cm, planner, peer, pairs)
             line = (f"density {row['obstacle_density']:.2f} {name:4s}: ours median {r['ours_ms']['median']:.1f} ms, "

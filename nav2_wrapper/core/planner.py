@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from robonix_common.params import param
 
-from . import _jump, _search
+from . import _chain, _jump, _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
@@ -32,6 +32,8 @@ DEFAULT_KERNEL = "jumps"
 # into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
 JUMP_CAP = 16
 JUMP_REACH = 4.0
+CHAIN_CAP = 64
+CHAIN_REACH = 16.0
 
 
 @dataclass
@@ -175,6 +177,17 @@ class GlobalPlanner:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
         self.scanned = 0
+        if self.cfg.heuristic_weight == 1.0 and self.kernel == "chains":
+            found, expansions, self.scanned = _chain.astar_chains(
+                search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
+                search.esc_cost, search.h_scale, BUCKET_WIDTH,
+                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(CHAIN_CAP, CHAIN_REACH, float(search.table[0]),
+                                                               search.h_scale)),
+                CHAIN_CAP, CHAIN_REACH)
+            if not found:
+                return None, np.zeros(0), expansions
+            cells, gvals = search.forward_path(self._stamp, target)
+            return cells, gvals, expansions
         if self.cfg.heuristic_weight == 1.0 and self.kernel == "jumps":
             found, expansions, self.scanned = _jump.astar_jumps(
                 search.costs, search.table, search.start, target, self._rec, self._parent, self._stamp,
