@@ -38,6 +38,7 @@ from ._search import (
     _mdr,
     _octile,
     _past_goal,
+    _prefetch,
     _relax,
     _room,
     _u,
@@ -45,6 +46,7 @@ from ._search import (
 
 _FOUND = 1
 _EXHAUSTED = 0
+AHEAD = 4   # cells ahead of a scan whose record is prefetched
 
 
 @njit(cache=True, inline="always")
@@ -74,6 +76,7 @@ def _straight(flat, rec, recg, y, r, c, g, k, w0, n, goal, seen, gr, gc, h_scale
         g += w0
         s += 1
         if s < n and y != goal and _zero3(flat, y + o, p) and g + h_scale * _octile(r, c, gr, gc) <= flim:
+            _prefetch(rec, 2 * (y + AHEAD * o))     # a column scan meets a new cache line every step
             if not _pass(rec, recg, y, g, seen, k):
                 return 0, 0, s - 1
             continue
@@ -115,6 +118,7 @@ def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, seen, gr, g
         if (i >= nd or z == goal or not _uniform(flat, z, cols)
                 or gz + h_scale * _octile(zr, zc, gr, gc) > flim):
             break
+        _prefetch(rec, 2 * (z + AHEAD * (dr * cols + dc)))
         if not _pass(rec, recg, z, gz, seen, d):
             return added, most, passed
         passed += 1
