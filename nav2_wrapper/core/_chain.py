@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._jump import _limit, _uniform, _zero3
 from ._search import (
     _NEED_ROOM,
     SQRT2,
@@ -47,6 +46,41 @@ from ._search import (
 _FOUND = 1
 _EXHAUSTED = 0
 AHEAD = 4   # cells ahead of a scan whose record is prefetched
+
+
+def chain_rise(cap: int, reach: float, w0: float, h_scale: float) -> float:
+    """Largest f increase of one filed entry over the popped cell whose scan filed it (sizes the bucket ring):
+    scans stop once past f + ``reach``, so one step beyond that (a step of factor ``w0`` raises f by at most
+    √2·(w0 + h_scale)), and they are at most ``cap`` diagonal plus ``cap`` straight steps long."""
+    return min((SQRT2 + 1.0) * cap * (w0 + h_scale), reach + SQRT2 * (w0 + h_scale))
+
+
+@njit(cache=True, inline="always")
+def _zero3(flat, a, p):
+    """Cells a − p, a, a + p all cost 0."""
+    return flat[_u(a - p)] == 0 and flat[_u(a)] == 0 and flat[_u(a + p)] == 0
+
+
+@njit(cache=True, inline="always")
+def _uniform(flat, y, cols):
+    """The 3×3 block around ``y`` is all cost 0 (``y`` at least one cell from the map edge)."""
+    return _zero3(flat, y - cols, 1) and _zero3(flat, y, 1) and _zero3(flat, y + cols, 1)
+
+
+@njit(cache=True, inline="always")
+def _limit(r, c, dr, dc, rows, cols, cap):
+    """Steps a scan from (r, c) in (dr, dc) may take so that every cell it tests for uniformity (all but the
+    last it reaches) stays one cell inside the map edge: the test reads the 3×3 around it."""
+    n = cap
+    if dr > 0:
+        n = min(n, rows - 1 - r)
+    elif dr < 0:
+        n = min(n, r)
+    if dc > 0:
+        n = min(n, cols - 1 - c)
+    elif dc < 0:
+        n = min(n, c)
+    return n
 
 
 @njit(cache=True, inline="always")
@@ -133,7 +167,7 @@ def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, seen, gr, g
 def astar_chains(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets, cap, reach):
     """``_search.astar_buckets`` with uniform cost-0 cells expanded by scans (see the module doc). Same record
     layout, return value (plus the cells scans passed) and failure state (every cell reachable from the start
-    closed). ``nbuckets`` must cover ``_jump.jump_rise(cap, reach, ...)``."""
+    closed). ``nbuckets`` must cover ``chain_rise(cap, reach, ...)``."""
     rows, cols = costs.shape
     recg = rec.view(np.float32)
     sr, sc = start // cols, start % cols

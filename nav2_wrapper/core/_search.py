@@ -6,10 +6,9 @@ the first process on a machine pays the compile time.
 
 Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation reads and
 writes one cache line, not three): word 0 is the state, word 1 the g (float32 bits). A state is
-64·stamp + 2·move + closed for the plan with that stamp (``STATE_SHIFT``; move 0-7 is the move that last gave
-the cell its g, 8 none, which the bucket kernel's pruning reads; 16 + move marks a g set by a scan, see
-``_jump``), so the buffer is reused between plans without clearing. No parent array: ``backtrack`` walks the
-g values back (``_jump``'s scans need one for the cells they file). The open list is a 4-ary heap of single
+32·stamp + 2·move + closed for the plan with that stamp (``STATE_SHIFT``; move 0-7 is the move that last gave
+the cell its g, 8 none, which the bucket kernel's pruning reads), so the buffer is reused between plans without
+clearing. No parent array: ``backtrack`` walks the g values back. The open list is a 4-ary heap of single
 int64 entries (f as float32 bits above the cell index): a heap move is one 8-byte copy, and a pop sifts
 down half as many levels as in a binary heap.
 """
@@ -24,7 +23,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 SQRT2 = math.sqrt(2.0)
-STATE_SHIFT = 6     # a record state word: stamp << STATE_SHIFT | move << 1 | closed, move 0-31 (see the module doc)
+STATE_SHIFT = 5     # a record state word: stamp << STATE_SHIFT | move << 1 | closed, move 0-8 (see the module doc)
 STRAIGHT_TOL = 2e-7   # relative: a step within this of the cheapest counts as tying with it (float32 g)
 TIE_EPS = 1e-6
 UB_TOL = 1e-6   # relative: a cell whose f is within this of the goal's g found so far is not expanded
@@ -254,7 +253,7 @@ def _close(rec, recg, cur, seen, goal, f):
     rec[_u(2 * cur)] = st | 1
     if _past_goal(rec, recg, seen, goal, f):
         return -1
-    return (st >> 1) & 31
+    return (st >> 1) & 15
 
 
 @njit(cache=True, inline="always")

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from robonix_common.params import param
 
-from . import _chain, _jump, _search
+from . import _chain, _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
@@ -83,13 +83,8 @@ class _Search:
         step = math.sqrt(2.0) * (max(float(finite.max()) if len(finite) else 1.0, self.esc_cost) + self.h_scale)
         return 1 << max(3, int(math.ceil(math.log2(max(step, rise) / width + 3))))
 
-    def forward_path(self, stamp: int, cell: int, parent: NDArray[np.int32] | None = None,
-                     ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them
-        (``parent``: the jumping search's, whose scanned-past cells have no record)."""
-        if parent is not None:
-            return _jump.backtrack_jumps(self.costs, self.table, self.rec, parent, stamp, self.start, cell,
-                                         self.esc_r2, self.esc_cost)
+    def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
         cells = _search.backtrack(self.costs, self.table, self.rec, stamp, self.start, cell, self.esc_r2,
                                   self.esc_cost)
         return cells, self.rec.view(np.float32)[2 * cells + 1].astype(np.float64)
@@ -102,8 +97,8 @@ class GlobalPlanner:
         self.cfg = cfg or PlannerConfig()
         self._size = 0
         self._stamp = 0
-        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel ("jumps" or "buckets")
-        self.scanned = 0                    # cells the last jumping search scanned past (bench figure)
+        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel ("chains" or "buckets")
+        self.scanned = 0                    # cells the last chained search expanded by scans (bench figure)
 
     def traversal_table(self) -> NDArray[np.float64]:
         c = self.cfg
@@ -117,7 +112,6 @@ class GlobalPlanner:
         """An 8-byte search record per cell (see ``_search``), reused between plans via stamps."""
         if n != self._size:
             self._rec = np.zeros(2 * n, np.int32)
-            self._parent = np.empty(n, np.int32)     # jumping search: written where a scan files a cell
             self._size, self._stamp = n, 0
         self._next_stamp()
 
@@ -181,25 +175,13 @@ class GlobalPlanner:
             found, expansions, self.scanned = _chain.astar_chains(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
                 search.esc_cost, search.h_scale, BUCKET_WIDTH,
-                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(CHAIN_CAP, CHAIN_REACH, float(search.table[0]),
+                search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, float(search.table[0]),
                                                                search.h_scale)),
                 CHAIN_CAP, CHAIN_REACH)
             if not found:
                 return None, np.zeros(0), expansions
             cells, gvals = search.forward_path(self._stamp, target)
             return cells, gvals, expansions
-        if self.cfg.heuristic_weight == 1.0 and self.kernel == "jumps":
-            found, expansions, self.scanned = _jump.astar_jumps(
-                search.costs, search.table, search.start, target, self._rec, self._parent, self._stamp,
-                search.esc_r2, search.esc_cost, search.h_scale, BUCKET_WIDTH,
-                search.ring_size(BUCKET_WIDTH, _jump.jump_rise(JUMP_CAP, JUMP_REACH, float(search.table[0]),
-                                                               search.h_scale)),
-                JUMP_CAP, JUMP_REACH)
-            if found:
-                cells, gvals = search.forward_path(self._stamp, target, self._parent)
-                return cells, gvals, expansions
-            # Scanned-past cells are not closed: the caller's fallback wants the start's closed component.
-            self._next_stamp()
         if self.cfg.heuristic_weight == 1.0:
             found, expansions = _search.astar_buckets(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
