@@ -58,7 +58,7 @@ RES = 0.05
 SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distance ranges, m
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
 OUT_AB = OUT.with_name("planner_ab.json")
-KERNELS = ("chains", "buckets")
+KERNELS = planner_module.KERNELS
 
 
 def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
@@ -190,7 +190,8 @@ def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) 
             costs[kernel] = r.cost if r.ok else math.inf
         for k in KERNELS:
             ratio[k].append(cpu[k][-1] / max(cpu["buckets"][-1], 1e-6))
-        cost_mismatch += any(not math.isclose(costs[k], costs["buckets"], rel_tol=1e-5) for k in KERNELS)
+        # float32 g: on 60-95 m paths the kernels report the same path's cost up to ~1e-5 apart (seen: 1.1e-5)
+        cost_mismatch += any(not math.isclose(costs[k], costs["buckets"], rel_tol=5e-5) for k in KERNELS)
     planner.kernel = planner_module.DEFAULT_KERNEL
     row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k])),
                      "scanned_median": int(np.median(scanned[k])),
@@ -238,6 +239,10 @@ def main() -> None:
     ap.add_argument("--chain-cap", type=int, help="override planner.CHAIN_CAP (experiments)")
     ap.add_argument("--chain-reach", type=float, help="override planner.CHAIN_REACH (experiments)")
     args = ap.parse_args()
+    if args.chain_cap is not None:
+        planner_module.CHAIN_CAP = args.chain_cap
+    if args.chain_reach is not None:
+        planner_module.CHAIN_REACH = args.chain_reach
     if args.ab:
         args.no_peer = True
     try:

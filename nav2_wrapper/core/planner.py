@@ -24,15 +24,16 @@ from .se2_planner import Se2PlannerConfig
 # re-opened so many cells that it expanded more than FIFO; 1/16 with LIFO beat 1.0 with FIFO by 7-17 % total
 # time on all six bench settings (38 % fewer expansions on 10 % near pairs), 1/32 and 1/64 no better.
 BUCKET_WIDTH = 1.0 / 16
-# The cost-optimal kernel: "jumps" scans through uniform cost-0 regions (_jump), "buckets" files every cell
-# (_search.astar_buckets). Same cost; see the README's planner section for the measured comparison.
-DEFAULT_KERNEL = "jumps"
+# The cost-optimal kernel: "chains" expands uniform cost-0 cells by scans (_chain), "buckets" puts every cell
+# through the queue (_search.astar_buckets). Same cost; see the README's planner section for the measured A/B.
+DEFAULT_KERNEL = "chains"
+KERNELS = ("chains", "buckets")
 # Longest scan (cells) before a cell is filed anyway, and how far past the scanning cell's f a scan goes before
 # it files the cell it is on (a scan away from the goal raises f by up to 2 per cell: without this it runs
 # into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
-JUMP_CAP = 16
-JUMP_REACH = 4.0
-CHAIN_CAP = 64
+# Paired CPU vs buckets, 40 pairs per setting (`planner_bench.py --ab --chain-cap C --chain-reach R`), 10/15/20 %
+# near and far: 32/16 0.68-0.93, 64/16 0.67-0.93, 32/8 0.69-0.95, 16/4 0.73-0.99 (one run each, loaded machine).
+CHAIN_CAP = 32
 CHAIN_REACH = 16.0
 
 
@@ -97,7 +98,7 @@ class GlobalPlanner:
         self.cfg = cfg or PlannerConfig()
         self._size = 0
         self._stamp = 0
-        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel ("chains" or "buckets")
+        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel, one of KERNELS
         self.scanned = 0                    # cells the last chained search expanded by scans (bench figure)
 
     def traversal_table(self) -> NDArray[np.float64]:
@@ -171,6 +172,8 @@ class GlobalPlanner:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
         self.scanned = 0
+        if self.kernel not in KERNELS:
+            raise ValueError(f"unknown planner kernel {self.kernel!r} (one of {KERNELS})")
         if self.cfg.heuristic_weight == 1.0 and self.kernel == "chains":
             found, expansions, self.scanned = _chain.astar_chains(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
