@@ -35,6 +35,7 @@ from ._search import (
     _interior,
     _mdc,
     _mdr,
+    _move_cost,
     _octile,
     _past_goal,
     _prefetch,
@@ -48,23 +49,17 @@ _EXHAUSTED = 0
 AHEAD = 4   # cells ahead of a scan whose record is prefetched
 
 
-def chain_rise(cap: int, reach: float, w0: float, h_scale: float) -> float:
+def chain_rise(cap: int, reach: float, wmax: float, h_scale: float) -> float:
     """Largest f increase of one filed entry over the popped cell whose scan filed it (sizes the bucket ring):
-    scans stop once past f + ``reach``, so one step beyond that (a step of factor ``w0`` raises f by at most
-    √2·(w0 + h_scale)), and they are at most ``cap`` diagonal plus ``cap`` straight steps long."""
-    return min((SQRT2 + 1.0) * cap * (w0 + h_scale), reach + SQRT2 * (w0 + h_scale))
+    scans stop once past f + ``reach``, so one step beyond that (a step into a cell of factor at most ``wmax``
+    raises f by at most √2·(wmax + h_scale)), and they are at most ``cap`` diagonal plus ``cap`` straight steps."""
+    return min((SQRT2 + 1.0) * cap * (wmax + h_scale), reach + SQRT2 * (wmax + h_scale))
 
 
 @njit(cache=True, inline="always")
 def _zero3(flat, a, p):
     """Cells a − p, a, a + p all cost 0."""
     return flat[_u(a - p)] == 0 and flat[_u(a)] == 0 and flat[_u(a + p)] == 0
-
-
-@njit(cache=True, inline="always")
-def _uniform(flat, y, cols):
-    """The 3×3 block around ``y`` is all cost 0 (``y`` at least one cell from the map edge)."""
-    return _zero3(flat, y - cols, 1) and _zero3(flat, y, 1) and _zero3(flat, y + cols, 1)
 
 
 @njit(cache=True, inline="always")
@@ -95,21 +90,26 @@ def _pass(rec, recg, y, g, seen, k):
 
 
 @njit(cache=True, inline="always")
-def _straight(flat, rec, recg, y, r, c, g, k, w0, n, goal, seen, gr, gc, h_scale, inv, cb, mask, buckets, counts,
-              flim, cols):
-    """Scan from uniform cell ``y`` = (r, c) at g ``g`` along straight move ``k``, at most ``n`` steps (see the
-    module doc). Returns (entries filed, that bucket's length, cells passed)."""
+def _straight(flat, table, rec, recg, y, r, c, g, k, n, goal, seen, gr, gc, h_scale, inv, cb, mask, buckets, counts,
+              flim, cols, esc):
+    """Scan from expanded cell ``y`` = (r, c) at g ``g`` along straight move ``k``, at most ``n`` steps (see the
+    module doc). A cell passes when it and its two side neighbours cost 0: the bucket kernel's pruning then leaves
+    only the move ahead whatever the cells ahead and behind cost. ``esc`` = (start row, start col, escape radius²,
+    escape cost) for ``_move_cost``. Returns (entries filed, that bucket's length, cells passed)."""
     dr, dc = _mdr(k), _mdc(k)
     o = dr * cols + dc
-    p = cols if dr == 0 else 1          # along the new line of the 3×3 block ahead
+    p = cols if dr == 0 else 1          # to the side neighbours
     s = 0
     while True:
+        step = _move_cost(flat, table, cols, r, c, r + dr, c + dc, esc[0], esc[1], esc[2], esc[3])
+        if step == np.inf:
+            return 0, 0, s              # blocked ahead: the scanned cell has no successor
         y += o
         r += dr
         c += dc
-        g += w0
+        g += step
         s += 1
-        if s < n and y != goal and _zero3(flat, y + o, p) and g + h_scale * _octile(r, c, gr, gc) <= flim:
+        if s < n and y != goal and _zero3(flat, y, p) and g + h_scale * _octile(r, c, gr, gc) <= flim:
             _prefetch(rec, 2 * (y + AHEAD * o))     # a column scan meets a new cache line every step
             if not _pass(rec, recg, y, g, seen, k):
                 return 0, 0, s - 1
@@ -121,14 +121,29 @@ def _straight(flat, rec, recg, y, r, c, g, k, w0, n, goal, seen, gr, gc, h_scale
 
 
 @njit(cache=True, inline="always")
-def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, seen, gr, gc, h_scale, inv, cb, mask, buckets,
-          counts, cap, flim):
-    """Expand uniform cell ``cur`` reached by move ``d`` (0-7) by scanning (see the module doc). Returns
+def scannable(flat, cur, r, c, d, rows, cols):
+    """Whether cell ``cur`` = (r, c) reached by move ``d`` (0-7) is expanded by a scan: it costs 0, lies off the
+    map edge, and after a straight arrival its two side neighbours cost 0 (only the move ahead survives the
+    pruning), after a diagonal one the two orthogonal neighbours behind it do (only the diagonal and its two
+    components survive)."""
+    if not (0 < r < rows - 1 and 0 < c < cols - 1) or flat[_u(cur)] != 0:
+        return False
+    dr, dc = _mdr(d), _mdc(d)
+    if d < 4:
+        p = cols if dr == 0 else 1
+        return flat[_u(cur - p)] == 0 and flat[_u(cur + p)] == 0
+    return flat[_u(cur - dr * cols)] == 0 and flat[_u(cur - dc)] == 0
+
+
+@njit(cache=True, inline="always")
+def _scan(flat, table, rows, cols, cur, r, c, d, gcur, goal, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+          buckets, counts, cap, flim, esc):
+    """Expand cell ``cur`` reached by move ``d`` (0-7), ``scannable``, by scanning (see the module doc). Returns
     (entries filed, the longest bucket after, cells passed)."""
     dr, dc = _mdr(d), _mdc(d)
     if d < 4:
-        return _straight(flat, rec, recg, cur, r, c, gcur, d, w0, _limit(r, c, dr, dc, rows, cols, cap), goal, seen,
-                         gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols)
+        return _straight(flat, table, rec, recg, cur, r, c, gcur, d, _limit(r, c, dr, dc, rows, cols, cap), goal,
+                         seen, gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols, esc)
     kv = 1 if dr > 0 else 0
     kh = 3 if dc > 0 else 2
     nd = _limit(r, c, dr, dc, rows, cols, cap)
@@ -136,20 +151,23 @@ def _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, seen, gr, g
     added = most = passed = 0
     i = 0
     while True:
-        # z is uniform and expanded: its successors are the two straight components and the diagonal
-        a, m, s = _straight(flat, rec, recg, z, zr, zc, gz, kv, w0, _limit(zr, zc, dr, 0, rows, cols, cap), goal,
-                            seen, gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols)
+        # z is expanded: its successors are the two straight components and the diagonal
+        a, m, s = _straight(flat, table, rec, recg, z, zr, zc, gz, kv, _limit(zr, zc, dr, 0, rows, cols, cap), goal,
+                            seen, gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols, esc)
         added += a
         most = max(most, m)
         passed += s
-        a, m, s = _straight(flat, rec, recg, z, zr, zc, gz, kh, w0, _limit(zr, zc, 0, dc, rows, cols, cap), goal,
-                            seen, gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols)
+        a, m, s = _straight(flat, table, rec, recg, z, zr, zc, gz, kh, _limit(zr, zc, 0, dc, rows, cols, cap), goal,
+                            seen, gr, gc, h_scale, inv, cb, mask, buckets, counts, flim, cols, esc)
         added += a
         most = max(most, m)
         passed += s
         i += 1
-        z, zr, zc, gz = z + dr * cols + dc, zr + dr, zc + dc, gz + SQRT2 * w0
-        if (i >= nd or z == goal or not _uniform(flat, z, cols)
+        step = _move_cost(flat, table, cols, zr, zc, zr + dr, zc + dc, esc[0], esc[1], esc[2], esc[3])
+        if step == np.inf:
+            return added, most, passed
+        z, zr, zc, gz = z + dr * cols + dc, zr + dr, zc + dc, gz + step
+        if (i >= nd or z == goal or flat[_u(z)] != 0 or flat[_u(z - dr * cols)] != 0 or flat[_u(z - dc)] != 0
                 or gz + h_scale * _octile(zr, zc, gr, gc) > flim):
             break
         _prefetch(rec, 2 * (z + AHEAD * (dr * cols + dc)))
@@ -204,9 +222,9 @@ def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_c
     inv = 1.0 / delta
     mask = buckets.shape[0] - 1
     room = buckets.shape[1] - burst
-    w0 = table[0]
     cb, pending, fullest, expansions, scanned = state[0], state[1], state[2], state[3], state[4]
     far = int(np.sqrt(max(esc_r2, 0.0))) + 2
+    esc = (sr, sc, esc_r2, esc_cost)
     while pending > 0:
         b = cb & mask
         while counts[b] > 0:
@@ -224,9 +242,9 @@ def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_c
             if d < 0:
                 continue
             expansions += 1
-            if d < 8 and cur != goal and 0 < r < rows - 1 and 0 < c < cols - 1 and _uniform(flat, cur, cols):
-                added, most, passed = _scan(flat, rows, cols, cur, r, c, d, gcur, w0, goal, rec, recg, seen, gr, gc,
-                                            h_scale, inv, cb, mask, buckets, counts, cap, fcur + reach)
+            if d < 8 and cur != goal and scannable(flat, cur, r, c, d, rows, cols):
+                added, most, passed = _scan(flat, table, rows, cols, cur, r, c, d, gcur, goal, rec, recg, seen, gr, gc,
+                                            h_scale, inv, cb, mask, buckets, counts, cap, fcur + reach, esc)
                 scanned += passed
             elif _interior(r, c, rows, cols, sr, sc, far):
                 if d == 0:

@@ -77,6 +77,11 @@ class _Search:
         self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
         self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
 
+    def max_factor(self) -> float:
+        """The dearest traversal factor a move can enter (escape cells included)."""
+        finite = self.table[np.isfinite(self.table)]
+        return max(float(finite.max()) if len(finite) else 1.0, self.esc_cost)
+
     def ring_size(self, width: float, rise: float = 0.0) -> int:
         """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale, one
         filed scan end by at most ``rise``."""
@@ -178,8 +183,8 @@ class GlobalPlanner:
             found, expansions, self.scanned = _chain.astar_chains(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
                 search.esc_cost, search.h_scale, BUCKET_WIDTH,
-                search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, float(search.table[0]),
-                                                               search.h_scale)),
+                search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, search.max_factor(),
+                                                                 search.h_scale)),
                 CHAIN_CAP, CHAIN_REACH)
             if not found:
                 return None, np.zeros(0), expansions
