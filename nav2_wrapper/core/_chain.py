@@ -1,24 +1,28 @@
-"""Chained variant of the cost-optimal bucket search (``_search.astar_buckets``): a uniform cost-0 cell is expanded
-by scanning, and the cells a scan passes are expanded on the spot, not through the queue.
+"""Chained variant of the cost-optimal bucket search (``_search.astar_buckets``): a cost-0 cell in open space is
+expanded by scanning, and the cells a scan passes are expanded on the spot, not through the queue.
 
 Why: on the bench maps 70-80 % of the cells every octile A* must expand are cost-0 cells whose whole 3×3
-neighbourhood is cost 0 (``bench/planner_bounds.py --blocks``, ``uniform_share``). Around such a cell the
-bucket kernel's move pruning (``_search._expand_after``) leaves exactly the jump-point successors: after a
-straight arrival only the move straight ahead, after a diagonal one the diagonal and its two straight
-components. So expanding it is a scan: walk straight ahead (or along the diagonal, and from every cell passed
-along its two components), giving each cell passed its g and the move that reached it, closed, as the bucket
-kernel would when expanding it. A scan stops at a cell that already has an equal or better g in this plan (that
-label's expansion covers it), and files the cell it ends on into the queue like any relaxation where it is
-not uniform (its 3×3 block is not all cost 0: it is expanded with the bucket kernel's pruning), is the goal,
-lies past f = the scanning cell's f + ``reach`` (a scan away from the goal would otherwise run where the
-search never gets), or ``cap`` steps out. The successor function and the records are the bucket kernel's, so
-the path is walked back along g by ``_search.backtrack``; only the order of expansion changes (a scanned cell
-may be expanded before its bucket: like a cell expanded early inside a bucket, a better g later re-files it).
+neighbourhood is cost 0 (``bench/planner_bounds.py --blocks``, ``uniform_share``). At a cost-0 cell the bucket
+kernel's move pruning (``_search._expand_after``) leaves exactly the jump-point successors whenever the
+neighbours it weighs cost 0 too: after a straight arrival with both side neighbours cost 0 only the move ahead
+(the sides are cheaper by the predecessor's diagonal, the forward diagonals at no more cost diagonal-first
+through a side, whatever they cost), after a diagonal arrival with the two orthogonal neighbours behind cost 0
+the diagonal and its two straight components. Such a cell (``scannable``) is expanded by a scan: walk straight
+ahead (or along the diagonal, and from every cell passed along its two components), giving each cell passed
+its g, the move that reached it and the closed bit, as the bucket kernel would when expanding it. A scan stops
+at a cell that already has an equal or better g in this plan (that label's expansion covers it) or that it
+cannot enter, and files the cell it ends on into the queue like any relaxation: the first one that is not
+passable in the same way (it is expanded with the bucket kernel's pruning), the goal, one past f = the scanning
+cell's f + ``reach`` (a scan away from the goal would otherwise run where the search never gets) or ``cap``
+steps out. The successor function and the records are the bucket kernel's, so the path is walked back along g
+by ``_search.backtrack``; only the order of expansion changes (a scanned cell may be expanded before its
+bucket: like a cell expanded early inside a bucket, a better g later re-files it). Costs are read on the fly
+(three loads per straight step), so nothing per costmap is cached or invalidated.
 
 Unlike jump point search proper, passed cells get records: scans from neighbouring origins overlap heavily on
-these maps, and the records let a scan stop where an earlier one already went with a better g.
+these maps, and the records let a scan stop where an earlier one already went with a better g (a record-free
+variant with a parent index per filed cell measured 0.98-1.19 × the bucket kernel's time, see the README).
 """
-
 from __future__ import annotations
 
 import numpy as np
@@ -64,8 +68,8 @@ def _zero3(flat, a, p):
 
 @njit(cache=True, inline="always")
 def _limit(r, c, dr, dc, rows, cols, cap):
-    """Steps a scan from (r, c) in (dr, dc) may take so that every cell it tests for uniformity (all but the
-    last it reaches) stays one cell inside the map edge: the test reads the 3×3 around it."""
+    """Steps a scan from (r, c) in (dr, dc) may take so that every cell it may pass (all but the last it reaches)
+    stays one cell inside the map edge: the pass test reads its neighbours."""
     n = cap
     if dr > 0:
         n = min(n, rows - 1 - r)
@@ -183,7 +187,7 @@ def _scan(flat, table, rows, cols, cur, r, c, d, gcur, goal, rec, recg, seen, gr
 
 @njit(cache=True)
 def astar_chains(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets, cap, reach):
-    """``_search.astar_buckets`` with uniform cost-0 cells expanded by scans (see the module doc). Same record
+    """``_search.astar_buckets`` with ``scannable`` cells expanded by scans (see the module doc). Same record
     layout, return value (plus the cells scans passed) and failure state (every cell reachable from the start
     closed). ``nbuckets`` must cover ``chain_rise(cap, reach, ...)``."""
     rows, cols = costs.shape
@@ -215,7 +219,7 @@ def astar_chains(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scal
 @njit(cache=True)
 def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta,  # noqa: C901
                    start, buckets, counts, state, drs, dcs, cap, reach, burst):
-    """``_search._expand`` plus the scan branch: a popped uniform cell (not the goal, reached by a move) is
+    """``_search._expand`` plus the scan branch: a popped ``scannable`` cell (not the goal, reached by a move) is
     expanded by ``_scan``, any other cell as there."""
     sr, sc = start // cols, start % cols
     gr, gc = goal // cols, goal % cols
