@@ -31,8 +31,10 @@ KERNELS = ("chains", "buckets")
 # Longest scan (cells) before a cell is filed anyway, and how far past the scanning cell's f a scan goes before
 # it files the cell it is on (a scan away from the goal raises f by up to 2 per cell: without this it runs
 # into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
-# Paired CPU vs buckets, 40 pairs per setting (`planner_bench.py --ab --chain-cap C --chain-reach R`), 10/15/20 %
-# near and far: 32/16 0.68-0.93, 64/16 0.67-0.93, 32/8 0.69-0.95, 16/4 0.73-0.99 (one run each, loaded machine).
+# Median paired CPU ratio vs buckets over the six settings, 40 pairs each (`planner_bench.py --ab --chain-cap C
+# --chain-reach R`, one run each on a loaded machine, noise ~±5 %): with the first pass rule (whole 3×3 cost 0)
+# 32/16 0.68-0.93, 64/16 0.67-0.93, 32/8 0.69-0.95, 16/4 0.73-0.99; with the current one 32/16 0.66-0.95,
+# 32/8 0.71-0.88, 16/16 0.71-0.88, 32/32 0.69-0.91: no clear winner, 32/16 kept.
 CHAIN_CAP = 32
 CHAIN_REACH = 16.0
 
