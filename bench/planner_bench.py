@@ -17,6 +17,11 @@ we cost moves, must never be cheaper than ours (ours is optimal in that model), 
 Reports median/p95/max plan time per density and setting (wall clock, and the planning thread's CPU
 time, which a loaded machine inflates far less), our time / peer time, expansions, the load average at
 start and end, and the controller's compute time per step. Writes bench/results/planner.json.
+
+``--ab`` compares the cost-optimal kernels instead (no peer, no controller): each pair is planned by the
+chained kernel and by the plain bucket kernel back to back (order alternating per pair), and per kernel the
+CPU time, queue pops (expansions) and cells expanded by scans are reported, plus the median of the paired CPU
+ratios and a check that both found the same cost. Writes bench/results/planner_ab.json.
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from nav2_wrapper.core import (
     HolonomicController,
     PlannerConfig,
 )
+from nav2_wrapper.core import planner as planner_module
 from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
@@ -51,6 +57,8 @@ Cell = tuple[int, int]
 RES = 0.05
 SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distance ranges, m
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
+OUT_AB = OUT.with_name("planner_ab.json")
+KERNELS = planner_module.KERNELS
 
 
 def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
@@ -163,6 +171,36 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     return row
 
 
+def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) -> dict:
+    """Each pair planned by both cost-optimal kernels back to back, alternating which goes first."""
+    cpu: dict[str, list[float]] = {k: [] for k in KERNELS}
+    pops: dict[str, list[int]] = {k: [] for k in KERNELS}
+    scanned: dict[str, list[int]] = {k: [] for k in KERNELS}
+    ratio: dict[str, list[float]] = {k: [] for k in KERNELS}
+    cost_mismatch = 0
+    for i, (s, g) in enumerate(pairs):
+        costs = {}
+        for kernel in KERNELS if i % 2 == 0 else KERNELS[::-1]:
+            planner.kernel = kernel
+            c0 = time.thread_time()
+            r = planner.plan(cm, world(cm, s), world(cm, g))
+            cpu[kernel].append((time.thread_time() - c0) * 1e3)
+            pops[kernel].append(r.expansions)
+            scanned[kernel].append(planner.scanned)
+            costs[kernel] = r.cost if r.ok else math.inf
+        for k in KERNELS:
+            ratio[k].append(cpu[k][-1] / max(cpu["buckets"][-1], 1e-6))
+        # float32 g: on 60-95 m paths the kernels report the same path's cost up to ~1e-5 apart (seen: 1.1e-5)
+        cost_mismatch += any(not math.isclose(costs[k], costs["buckets"], rel_tol=5e-5) for k in KERNELS)
+    planner.kernel = planner_module.DEFAULT_KERNEL
+    row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k])),
+                     "scanned_median": int(np.median(scanned[k])),
+                     "cpu_over_buckets_median_of_paired_ratios": round(float(np.median(ratio[k])), 3)}
+                 for k in KERNELS}
+    row["cost_mismatches"] = cost_mismatch
+    return row
+
+
 def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float, float],
                           steps: int = 400) -> list[float]:
     """Time HolonomicController.compute on a 4 m rolling local costmap along a real path (integrator loop)."""
@@ -197,7 +235,16 @@ def main() -> None:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
     ap.add_argument("--no-peer", action="store_true", help="skip pyastar2d")
+    ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (jumps vs buckets)")
+    ap.add_argument("--chain-cap", type=int, help="override planner.CHAIN_CAP (experiments)")
+    ap.add_argument("--chain-reach", type=float, help="override planner.CHAIN_REACH (experiments)")
     args = ap.parse_args()
+    if args.chain_cap is not None:
+        planner_module.CHAIN_CAP = args.chain_cap
+    if args.chain_reach is not None:
+        planner_module.CHAIN_REACH = args.chain_reach
+    if args.ab:
+        args.no_peer = True
     try:
         import pyastar2d  # noqa: F401
         use_peer = not args.no_peer
@@ -215,7 +262,10 @@ def main() -> None:
     t_compile = time.perf_counter()
     warm = Costmap(CostmapConfig(obstacle_layer=False, footprint=fp))
     warm.set_static_map(GridMap(np.zeros((50, 50), np.int8), RES))
-    planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
+    for kernel in KERNELS:       # both cost-optimal kernels, so neither pays its compile in the first pair
+        planner.kernel = kernel
+        planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
+    planner.kernel = planner_module.DEFAULT_KERNEL
     results["first_call_s"] = round(time.perf_counter() - t_compile, 3)
     print(f"numba first call (cache load/compile): {results['first_call_s']:.2f} s")
     ctrl_times: list[float] = []
@@ -231,6 +281,14 @@ def main() -> None:
         row: dict = {"obstacle_density": round(float((grid.data == 100).mean()), 3)}
         for name in args.settings:
             pairs = pick_pairs(cm, args.pairs, rng, *SETTINGS[name])
+            if args.ab:
+                r = row[name] = run_ab(cm, planner, pairs)
+                print(f"density {row['obstacle_density']:.2f} {name:4s}: " + " | ".join(
+                    f"{k} CPU ms median {r[k]['cpu_ms']['median']:.2f} p95 {r[k]['cpu_ms']['p95']:.2f} "
+                    f"(x{r[k]['cpu_over_buckets_median_of_paired_ratios']} buckets, paired), pops "
+                    f"{r[k]['pops_median']}, scanned {r[k]['scanned_median']}" for k in KERNELS)
+                    + f" | cost mismatches {r['cost_mismatches']}", flush=True)
+                continue
             r = row[name] = run_setting(cm, planner, peer, pairs)
             line = (f"density {row['obstacle_density']:.2f} {name:4s}: ours median {r['ours_ms']['median']:.1f} ms, "
                     f"p95 {r['ours_ms']['p95']:.1f}, max {r['ours_ms']['max']:.1f} "
@@ -247,9 +305,16 @@ def main() -> None:
                          f"{r['peer_paths_squeezing_diagonally']} squeezing")
             print(line, flush=True)
         results["densities"][f"{dens:.2f}"] = row
+        if args.ab:
+            continue
         s, g = pick_pairs(cm, 1, rng, *SETTINGS["far"])[0]
         ctrl_times += controller_step_times(cm, planner.plan(cm, world(cm, s), world(cm, g)).path, world(cm, g))
     results["load_avg_at_end"] = os.getloadavg()[0]
+    if args.ab:
+        OUT_AB.parent.mkdir(parents=True, exist_ok=True)
+        OUT_AB.write_text(json.dumps(results, indent=2) + "\n")
+        print(f"load average {results['load_avg_at_start']:.1f} -> {results['load_avg_at_end']:.1f}; wrote {OUT_AB}")
+        return
     cms = np.array(ctrl_times) * 1e3
     results["controller_ms_median"] = round(float(np.median(cms)), 3)
     results["controller_ms_p95"] = round(float(np.percentile(cms, 95)), 3)

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from robonix_common.params import param
 
-from . import _search
+from . import _chain, _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
@@ -24,6 +24,19 @@ from .se2_planner import Se2PlannerConfig
 # re-opened so many cells that it expanded more than FIFO; 1/16 with LIFO beat 1.0 with FIFO by 7-17 % total
 # time on all six bench settings (38 % fewer expansions on 10 % near pairs), 1/32 and 1/64 no better.
 BUCKET_WIDTH = 1.0 / 16
+# The cost-optimal kernel: "chains" expands uniform cost-0 cells by scans (_chain), "buckets" puts every cell
+# through the queue (_search.astar_buckets). Same cost; see the README's planner section for the measured A/B.
+DEFAULT_KERNEL = "chains"
+KERNELS = ("chains", "buckets")
+# Longest scan (cells) before a cell is filed anyway, and how far past the scanning cell's f a scan goes before
+# it files the cell it is on (a scan away from the goal raises f by up to 2 per cell: without this it runs
+# into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
+# Median paired CPU ratio vs buckets over the six settings, 40 pairs each (`planner_bench.py --ab --chain-cap C
+# --chain-reach R`, one run each on a loaded machine, noise ~±5 %): with the first pass rule (whole 3×3 cost 0)
+# 32/16 0.68-0.93, 64/16 0.67-0.93, 32/8 0.69-0.95, 16/4 0.73-0.99; with the current one 32/16 0.66-0.95,
+# 32/8 0.71-0.88, 16/16 0.71-0.88, 32/32 0.69-0.91: no clear winner, 32/16 kept.
+CHAIN_CAP = 32
+CHAIN_REACH = 16.0
 
 
 @dataclass
@@ -66,11 +79,17 @@ class _Search:
         self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
         self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
 
-    def ring_size(self, width: float) -> int:
-        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale."""
+    def max_factor(self) -> float:
+        """The dearest traversal factor a move can enter (escape cells included)."""
+        finite = self.table[np.isfinite(self.table)]
+        return max(float(finite.max()) if len(finite) else 1.0, self.esc_cost)
+
+    def ring_size(self, width: float, rise: float = 0.0) -> int:
+        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale, one
+        filed scan end by at most ``rise``."""
         finite = self.table[np.isfinite(self.table)]
         step = math.sqrt(2.0) * (max(float(finite.max()) if len(finite) else 1.0, self.esc_cost) + self.h_scale)
-        return 1 << max(3, int(math.ceil(math.log2(step / width + 3))))
+        return 1 << max(3, int(math.ceil(math.log2(max(step, rise) / width + 3))))
 
     def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
@@ -86,6 +105,8 @@ class GlobalPlanner:
         self.cfg = cfg or PlannerConfig()
         self._size = 0
         self._stamp = 0
+        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel, one of KERNELS
+        self.scanned = 0                    # cells the last chained search expanded by scans (bench figure)
 
     def traversal_table(self) -> NDArray[np.float64]:
         c = self.cfg
@@ -157,6 +178,20 @@ class GlobalPlanner:
     def _search(self, search: _Search, target: int) -> tuple[NDArray | None, NDArray, int]:
         """(cells start..target, g along them, expansions), or cells None when the target is unreachable
         (then every cell reachable from the start is closed)."""
+        self.scanned = 0
+        if self.kernel not in KERNELS:
+            raise ValueError(f"unknown planner kernel {self.kernel!r} (one of {KERNELS})")
+        if self.cfg.heuristic_weight == 1.0 and self.kernel == "chains":
+            found, expansions, self.scanned = _chain.astar_chains(
+                search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
+                search.esc_cost, search.h_scale, BUCKET_WIDTH,
+                search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, search.max_factor(),
+                                                                 search.h_scale)),
+                CHAIN_CAP, CHAIN_REACH)
+            if not found:
+                return None, np.zeros(0), expansions
+            cells, gvals = search.forward_path(self._stamp, target)
+            return cells, gvals, expansions
         if self.cfg.heuristic_weight == 1.0:
             found, expansions = _search.astar_buckets(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
