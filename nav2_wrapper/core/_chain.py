@@ -33,8 +33,8 @@ from ._search import (
     SQRT2,
     STATE_SHIFT,
     _close,
-    _expand_after,
     _expand_border,
+    _expand_interior,
     _file,
     _interior,
     _mdc,
@@ -217,7 +217,7 @@ def astar_chains(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scal
 
 
 @njit(cache=True)
-def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta,  # noqa: C901
+def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale, delta,
                    start, buckets, counts, state, drs, dcs, cap, reach, burst):
     """``_search._expand`` plus the scan branch: a popped ``scannable`` cell (not the goal, reached by a move) is
     expanded by ``_scan``, any other cell as there."""
@@ -251,33 +251,8 @@ def _expand_chains(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_c
                                             h_scale, inv, cb, mask, buckets, counts, cap, fcur + reach, esc)
                 scanned += passed
             elif _interior(r, c, rows, cols, sr, sc, far):
-                if d == 0:
-                    added, most = _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 1:
-                    added, most = _expand_after(1, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 2:
-                    added, most = _expand_after(2, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 3:
-                    added, most = _expand_after(3, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 4:
-                    added, most = _expand_after(4, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 5:
-                    added, most = _expand_after(5, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 6:
-                    added, most = _expand_after(6, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 7:
-                    added, most = _expand_after(7, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                else:
-                    added, most = _expand_after(8, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
+                added, most = _expand_interior(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                               h_scale, inv, cb, mask, buckets, counts)
             else:
                 added, most = _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc,
                                              esc_r2, esc_cost, h_scale, inv, cb, mask, buckets, counts, drs, dcs)

@@ -364,33 +364,8 @@ def _expand(flat, rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_
                 continue
             expansions += 1
             if _interior(r, c, rows, cols, sr, sc, far):
-                if d == 0:      # one copy per arrival move: its pruning rules fold to constants
-                    added, most = _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 1:
-                    added, most = _expand_after(1, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 2:
-                    added, most = _expand_after(2, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 3:
-                    added, most = _expand_after(3, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 4:
-                    added, most = _expand_after(4, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 5:
-                    added, most = _expand_after(5, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 6:
-                    added, most = _expand_after(6, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                elif d == 7:
-                    added, most = _expand_after(7, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
-                else:
-                    added, most = _expand_after(8, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
-                                                h_scale, inv, cb, mask, buckets, counts)
+                added, most = _expand_interior(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc,
+                                               h_scale, inv, cb, mask, buckets, counts)
                 pending += added
                 fullest = max(fullest, most)
             else:
@@ -482,6 +457,38 @@ def _expand_after(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc
             _prefetch(rec, 2 * (2 * nb - cur))
     return added, most
 
+
+@njit(cache=True, inline="always")
+def _expand_interior(d, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask, buckets,
+                     counts):
+    """``_expand_after`` for arrival move ``d`` (0-8), with one inlined copy per move so that its pruning rules
+    fold to constants (a variable ``d`` would keep every move test in the hot loop)."""
+    if d == 0:
+        return _expand_after(0, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 1:
+        return _expand_after(1, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 2:
+        return _expand_after(2, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 3:
+        return _expand_after(3, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 4:
+        return _expand_after(4, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 5:
+        return _expand_after(5, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 6:
+        return _expand_after(6, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    if d == 7:
+        return _expand_after(7, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                             buckets, counts)
+    return _expand_after(8, cur, r, c, gcur, cols, flat, table, rec, recg, seen, gr, gc, h_scale, inv, cb, mask,
+                         buckets, counts)
 
 @njit(cache=True)
 def _expand_border(flat, rows, cols, table, r, c, gcur, rec, recg, seen, sr, sc, gr, gc, esc_r2, esc_cost,
