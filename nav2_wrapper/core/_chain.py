@@ -31,7 +31,6 @@ from numba import njit
 from ._search import (
     _NEED_ROOM,
     SQRT2,
-    STATE_SHIFT,
     _close,
     _expand_border,
     _expand_interior,
@@ -46,6 +45,7 @@ from ._search import (
     _relax,
     _room,
     _u,
+    open_buckets,
 )
 
 _FOUND = 1
@@ -191,22 +191,9 @@ def astar_chains(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scal
     layout, return value (plus the cells scans passed) and failure state (every cell reachable from the start
     closed). ``nbuckets`` must cover ``chain_rise(cap, reach, ...)``."""
     rows, cols = costs.shape
-    recg = rec.view(np.float32)
-    sr, sc = start // cols, start % cols
-    gr, gc = goal // cols, goal % cols
-    seen = stamp << STATE_SHIFT
-    inv = 1.0 / delta
-    mask = nbuckets - 1
-    buckets = np.empty((nbuckets, 1024), np.int32)
-    counts = np.zeros(nbuckets, np.int64)
-    rec[2 * start] = seen - 1      # an earlier plan's state, so the start is filed below
-    cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    key = _relax(rec, recg, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
-    fullest = _file(buckets, counts, key, start)
     # the loop's state between calls: current bucket, open entries, fullest bucket, expansions, cells scanned
-    state = np.array([cb, 1, fullest, 0, 0], np.int64)
-    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
-    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
+    recg, seen, buckets, counts, state, drs, dcs = open_buckets(costs, start, goal, rec, stamp, h_scale, delta,
+                                                                 nbuckets, 5)
     burst = 2 * cap + 8        # the most entries one expansion can file
     while True:
         status = _expand_chains(costs.ravel(), rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale,

@@ -278,6 +278,32 @@ _EXHAUSTED = 0
 _NEED_ROOM = -1
 
 
+@njit(cache=True, inline="always")
+def open_buckets(costs, start, goal, rec, stamp, h_scale, delta, nbuckets, nstate):
+    """A bucket search's starting state, shared by the bucket and chained kernels: the float32 view of the
+    records, this plan's stamp bits, the bucket ring with the start filed, and the loop state carried between
+    calls of the expansion loop (``nstate`` words: current bucket, open entries, fullest bucket, expansions, then
+    zeros for the kernel's own counters), plus the neighbour offsets (up, down, left, right, then the diagonals
+    up-left, up-right, down-left, down-right)."""
+    cols = costs.shape[1]
+    recg = rec.view(np.float32)
+    sr, sc = start // cols, start % cols
+    gr, gc = goal // cols, goal % cols
+    seen = stamp << STATE_SHIFT
+    inv = 1.0 / delta
+    buckets = np.empty((nbuckets, 1024), np.int32)
+    counts = np.zeros(nbuckets, np.int64)
+    rec[2 * start] = seen - 1      # an earlier plan's state, so the start is filed below
+    cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
+    key = _relax(rec, recg, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, nbuckets - 1)
+    fullest = _file(buckets, counts, key, start)
+    state = np.zeros(nstate, np.int64)
+    state[0], state[1], state[2] = cb, 1, fullest
+    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
+    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
+    return recg, seen, buckets, counts, state, drs, dcs
+
+
 @njit(cache=True)
 def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_scale, delta, nbuckets):
     """Cost-optimal A* (h = octile distance × ``h_scale``, consistent) with a bucket queue instead of a heap.
@@ -307,23 +333,8 @@ def astar_buckets(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, h_sca
     reachable from the start is closed.
     """
     rows, cols = costs.shape
-    recg = rec.view(np.float32)
-    sr, sc = start // cols, start % cols
-    gr, gc = goal // cols, goal % cols
-    seen = stamp << STATE_SHIFT
-    inv = 1.0 / delta
-    mask = nbuckets - 1
-    buckets = np.empty((nbuckets, 1024), np.int32)
-    counts = np.zeros(nbuckets, np.int64)
-    rec[2 * start] = seen - 1      # an earlier plan's state, so the start is filed below
-    cb = int(h_scale * _octile(sr, sc, gr, gc) * inv)      # absolute index of the current bucket
-    key = _relax(rec, recg, 8, start, 0.0, seen, sr, sc, gr, gc, h_scale, inv, cb, mask)
-    fullest = _file(buckets, counts, key, start)
-    # the loop's state between calls of _expand: current bucket, open entries, fullest bucket, expansions
-    state = np.array([cb, 1, fullest, 0], np.int64)
-    # neighbours: up, down, left, right, then the diagonals (up-left, up-right, down-left, down-right)
-    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
-    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
+    recg, seen, buckets, counts, state, drs, dcs = open_buckets(costs, start, goal, rec, stamp, h_scale, delta,
+                                                                 nbuckets, 4)
     while True:
         status = _expand(costs.ravel(), rows, cols, table, goal, rec, recg, seen, esc_r2, esc_cost, h_scale,
                          delta, start, buckets, counts, state, drs, dcs)
