@@ -87,8 +87,7 @@ class _Search:
     def ring_size(self, width: float, rise: float = 0.0) -> int:
         """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale, one
         filed scan end by at most ``rise``."""
-        finite = self.table[np.isfinite(self.table)]
-        step = math.sqrt(2.0) * (max(float(finite.max()) if len(finite) else 1.0, self.esc_cost) + self.h_scale)
+        step = math.sqrt(2.0) * (self.max_factor() + self.h_scale)
         return 1 << max(3, int(math.ceil(math.log2(max(step, rise) / width + 3))))
 
     def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
