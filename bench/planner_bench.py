@@ -235,7 +235,7 @@ def main() -> None:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
     ap.add_argument("--no-peer", action="store_true", help="skip pyastar2d")
-    ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (jumps vs buckets)")
+    ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (chains vs buckets)")
     ap.add_argument("--chain-cap", type=int, help="override planner.CHAIN_CAP (experiments)")
     ap.add_argument("--chain-reach", type=float, help="override planner.CHAIN_REACH (experiments)")
     args = ap.parse_args()

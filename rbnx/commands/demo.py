@@ -286,8 +286,8 @@ def _clearance_field(scene: str, sim_name: str | None, rec: Recorder) -> Any:
 
 
 def _note_sim_loop(rpc: DemoRpc, summary: dict[str, Any]) -> None:
-    """The simulator's loop figures (achieved real-time factor, waits for a late /cmd_vel) into the summary and
-    one line: they say how far the machine's load shaped the run."""
+    """The simulator's loop figures (achieved real-time factor, waits for a late /cmd_vel) into the summary
+    (``_finish`` prints them after the goal table): they say how far the machine's load shaped the run."""
     try:
         loop = rpc.scene_info().get("loop") or {}
     except Exception as exc:  # a figure of the report, never a reason to fail the demo
