@@ -187,11 +187,7 @@ class GlobalPlanner:
                 search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, search.max_factor(),
                                                                  search.h_scale)),
                 CHAIN_CAP, CHAIN_REACH)
-            if not found:
-                return None, np.zeros(0), expansions
-            cells, gvals = search.forward_path(self._stamp, target)
-            return cells, gvals, expansions
-        if self.cfg.heuristic_weight == 1.0:
+        elif self.cfg.heuristic_weight == 1.0:
             found, expansions = _search.astar_buckets(
                 search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
                 search.esc_cost, search.h_scale, BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
