@@ -1,5 +1,5 @@
 """numba kernels for the global planner: cost-aware 8-connected A*, the backtrack
-that recovers a path from the search's g values, and the line-of-sight shortcut pass.
+that recovers a path from the search's g values, the line-of-sight shortcut pass and the path densifier.
 
 Kept apart from planner.py so the Python-level logic stays readable; compiled with cache=True so only
 the first process on a machine pays the compile time.
@@ -560,6 +560,15 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
         straight = -1               # the neighbour that keeps the last step's direction
         straightv = np.inf
         ahead = cur + (cur - out[m - 2]) if m >= 2 else -1
+        # Off the map edge and outside the escape disc every move into cur costs w(cur) times its length (or is a
+        # squeeze): what _move_cost gives, with w(cur) and the four orthogonal weights loaded once, not per move.
+        plain = 0 < r < rows - 1 and 0 < c < cols - 1 and (r - sr) * (r - sr) + (c - sc) * (c - sc) > esc_r2
+        if plain:
+            wcur = table[flat[cur]]
+            blocked_up = table[flat[cur - cols]] == np.inf
+            blocked_down = table[flat[cur + cols]] == np.inf
+            blocked_left = table[flat[cur - 1]] == np.inf
+            blocked_right = table[flat[cur + 1]] == np.inf
         for k in range(8):
             pr, pc = _neighbour(r, c, k)
             if pr < 0 or pr >= rows or pc < 0 or pc >= cols:
@@ -568,7 +577,15 @@ def backtrack(costs, table, rec, stamp, start, cell, esc_r2, esc_cost):
             st = rec[2 * p]
             if st < this or not st & 1:    # not closed in this plan
                 continue
-            v = np.float64(recg[2 * p + 1]) + _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
+            if not plain:
+                step = _move_cost(flat, table, cols, pr, pc, r, c, sr, sc, esc_r2, esc_cost)
+            elif k < 4:
+                step = wcur
+            elif (blocked_up if pr < r else blocked_down) and (blocked_left if pc < c else blocked_right):
+                step = np.inf
+            else:
+                step = SQRT2 * wcur
+            v = np.float64(recg[2 * p + 1]) + step
             if v < bestv:
                 bestv = v
                 best = p
@@ -650,3 +667,29 @@ def shortcut(costs, table, path, gvals, slack):
         m += 1
         i = best
     return keep[:m]
+
+
+@njit(cache=True)
+def densify(pts, spacing):
+    """``pts`` (N ≥ 2, 2) with each segment split into ceil(length / spacing) equal steps (at least one). One pass,
+    no temporaries: the numpy version of the same arithmetic cost ~0.1 ms a plan in array set-up alone."""
+    m = pts.shape[0]
+    steps = np.empty(m - 1, np.int64)
+    total = 1
+    for i in range(m - 1):
+        n = int(math.ceil(math.hypot(pts[i + 1, 0] - pts[i, 0], pts[i + 1, 1] - pts[i, 1]) / spacing))
+        steps[i] = max(1, n)
+        total += steps[i]
+    out = np.empty((total, 2))
+    out[0] = pts[0]
+    j = 1
+    for i in range(m - 1):
+        n = steps[i]
+        dx = pts[i + 1, 0] - pts[i, 0]
+        dy = pts[i + 1, 1] - pts[i, 1]
+        for k in range(1, n + 1):
+            t = k / n
+            out[j, 0] = pts[i, 0] + t * dx
+            out[j, 1] = pts[i, 1] + t * dy
+            j += 1
+    return out

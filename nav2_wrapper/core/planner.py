@@ -143,8 +143,9 @@ class GlobalPlanner:
         self._buffers(rows * cols)
         s_flat, g_flat = sr * cols + sc, gr * cols + gc
         target = g_flat
-        candidates = self._goal_candidates(costs, table, gr, gc, res)
+        candidates = None           # only needed when the goal cell is blocked or out of reach
         if not np.isfinite(table[costs[gr, gc]]):
+            candidates = self._goal_candidates(costs, table, gr, gc, res)
             if len(candidates) == 0:
                 return PlanResult(False, reason=self._blocked_reason(costs[gr, gc], goal))
             target = int(candidates[0])
@@ -153,6 +154,8 @@ class GlobalPlanner:
         cells, gvals, expansions = self._search(search, target)
         if cells is None:
             # The failed one-sided search closed the start's whole component: take the nearest closed candidate.
+            if candidates is None:
+                candidates = self._goal_candidates(costs, table, gr, gc, res)
             reach = [int(c) for c in candidates if _search.closed(self._rec, int(c), self._stamp)]
             if not reach:
                 why = self._blocked_reason(costs[gr, gc], goal) if not np.isfinite(table[costs[gr, gc]]) else (
@@ -222,12 +225,7 @@ def densify(pts: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
     """Insert points so consecutive ones are ≤ spacing apart (controllers expect dense Nav2-style paths)."""
     if len(pts) < 2:
         return pts.copy()
-    seg = np.diff(pts, axis=0)
-    n = np.maximum(1, np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / spacing)).astype(np.int64)
-    which = np.repeat(np.arange(len(seg)), n)               # one array op per path, not a loop per vertex
-    k = np.arange(1, len(which) + 1) - np.repeat(np.cumsum(n) - n, n)
-    t = (k / n[which])[:, None]
-    return np.vstack([pts[:1], pts[:-1][which] + t * seg[which]])
+    return _search.densify(np.ascontiguousarray(pts, dtype=np.float64), float(spacing))
 
 
 def path_length(path: NDArray[np.float64]) -> float:
