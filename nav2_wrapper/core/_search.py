@@ -646,8 +646,14 @@ def segment_cost(costs, table, r0, c0, r1, c1):
 @njit(cache=True)
 def shortcut(costs, table, path, gvals, slack):
     """Theta*-style post-pass: from each kept vertex jump to the farthest later vertex whose straight segment
-    is collision-free and no costlier than the sub-path it replaces. Returns indices of kept vertices."""
+    is collision-free and no costlier than the sub-path it replaces. Returns indices of kept vertices.
+
+    While the path from vertex i runs straight on in one of the 8 directions, the segment to the next vertex visits
+    exactly the cells the last one did plus that vertex (and, on a diagonal, checks its two corner cells), so its
+    cost is extended by one cell in the same order ``segment_cost`` sums, the same float result, instead of walked
+    again from i: the walk is quadratic in the run's length."""
     cols = costs.shape[1]
+    flat = costs.ravel()
     n = path.shape[0]
     keep = np.empty(n, np.int64)
     m = 0
@@ -657,9 +663,29 @@ def shortcut(costs, table, path, gvals, slack):
     while i < n - 1:
         best = i + 1
         r0, c0 = path[i] // cols, path[i] % cols
+        dr, dc = path[i + 1] // cols - r0, path[i + 1] % cols - c0
+        run = True                      # vertices i..j-1 lie on one straight line of unit steps (dr, dc)
+        total = table[flat[path[i + 1]]]
+        if dr != 0 and dc != 0 and (table[flat[r0 * cols + c0 + dc]] == np.inf
+                                    or table[flat[(r0 + dr) * cols + c0]] == np.inf):
+            total = np.inf              # the first diagonal step's corner: every segment from i crosses it
         for j in range(i + 2, n):
             r1, c1 = path[j] // cols, path[j] % cols
-            sc = segment_cost(costs, table, r0, c0, r1, c1)
+            rp, cp = path[j - 1] // cols, path[j - 1] % cols
+            if run and r1 - rp == dr and c1 - cp == dc:
+                if total != np.inf and dr != 0 and dc != 0 and (table[flat[rp * cols + cp + dc]] == np.inf
+                                                                 or table[flat[(rp + dr) * cols + cp]] == np.inf):
+                    total = np.inf
+                total += table[flat[path[j]]]
+                if total == np.inf:
+                    sc = np.inf
+                else:
+                    dx = float(c1 - c0)
+                    dy = float(r1 - r0)
+                    sc = math.sqrt(dx * dx + dy * dy) * total / (j - i)
+            else:
+                run = False
+                sc = segment_cost(costs, table, r0, c0, r1, c1)
             if sc == np.inf or sc > (gvals[j] - gvals[i]) * (1.0 + slack) + 1e-9:
                 break
             best = j
