@@ -21,7 +21,8 @@ start and end, and the controller's compute time per step. Writes bench/results/
 ``--ab`` compares the cost-optimal kernels instead (no peer, no controller): each pair is planned by the
 chained kernel and by the plain bucket kernel back to back (order alternating per pair), and per kernel the
 CPU time, queue pops (expansions) and cells expanded by scans are reported, plus the median of the paired CPU
-ratios and a check that both found the same cost. Writes bench/results/planner_ab.json.
+ratios and a check that both found the same cost. ``--ab-width W`` does the same for the default kernel at the
+default bucket width (planner.BUCKET_WIDTH) and at W. Writes bench/results/planner_ab.json.
 """
 
 from __future__ import annotations
@@ -59,6 +60,7 @@ SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distanc
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
 OUT_AB = OUT.with_name("planner_ab.json")
 KERNELS = planner_module.KERNELS
+DEFAULT_WIDTH = planner_module.BUCKET_WIDTH    # captured before any A/B sets the module's value
 
 
 def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
@@ -171,32 +173,47 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     return row
 
 
-def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]]) -> dict:
-    """Each pair planned by both cost-optimal kernels back to back, alternating which goes first."""
-    cpu: dict[str, list[float]] = {k: [] for k in KERNELS}
-    pops: dict[str, list[int]] = {k: [] for k in KERNELS}
-    scanned: dict[str, list[int]] = {k: [] for k in KERNELS}
-    ratio: dict[str, list[float]] = {k: [] for k in KERNELS}
+Variant = tuple[str, float]     # (cost-optimal kernel, bucket width)
+
+
+def ab_variants(width_b: float | None) -> dict[str, Variant]:
+    """The two configurations ``--ab`` compares, the reference (the ratios' denominator) last: the two kernels at
+    the default bucket width, or with ``--ab-width`` the default kernel at the default width and at that one."""
+    kernel, width = planner_module.DEFAULT_KERNEL, DEFAULT_WIDTH
+    if width_b is None:
+        return {k: (k, width) for k in KERNELS}
+    return {f"width {width:g}": (kernel, width), f"width {width_b:g}": (kernel, width_b)}
+
+
+def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]], variants: dict[str, Variant]) -> dict:
+    """Each pair planned by both variants back to back, alternating which goes first."""
+    names = list(variants)
+    ref = names[-1]
+    cpu: dict[str, list[float]] = {k: [] for k in names}
+    pops: dict[str, list[int]] = {k: [] for k in names}
+    scanned: dict[str, list[int]] = {k: [] for k in names}
+    ratio: dict[str, list[float]] = {k: [] for k in names}
     cost_mismatch = 0
     for i, (s, g) in enumerate(pairs):
         costs = {}
-        for kernel in KERNELS if i % 2 == 0 else KERNELS[::-1]:
-            planner.kernel = kernel
+        for name in names if i % 2 == 0 else names[::-1]:
+            planner.kernel, planner_module.BUCKET_WIDTH = variants[name]
             c0 = time.thread_time()
             r = planner.plan(cm, world(cm, s), world(cm, g))
-            cpu[kernel].append((time.thread_time() - c0) * 1e3)
-            pops[kernel].append(r.expansions)
-            scanned[kernel].append(planner.scanned)
-            costs[kernel] = r.cost if r.ok else math.inf
-        for k in KERNELS:
-            ratio[k].append(cpu[k][-1] / max(cpu["buckets"][-1], 1e-6))
+            cpu[name].append((time.thread_time() - c0) * 1e3)
+            pops[name].append(r.expansions)
+            scanned[name].append(planner.scanned)
+            costs[name] = r.cost if r.ok else math.inf
+        for k in names:
+            ratio[k].append(cpu[k][-1] / max(cpu[ref][-1], 1e-6))
         # float32 g: on 60-95 m paths the kernels report the same path's cost up to ~1e-5 apart (seen: 1.1e-5)
-        cost_mismatch += any(not math.isclose(costs[k], costs["buckets"], rel_tol=5e-5) for k in KERNELS)
-    planner.kernel = planner_module.DEFAULT_KERNEL
+        cost_mismatch += any(not math.isclose(costs[k], costs[ref], rel_tol=5e-5) for k in names)
+    planner.kernel, planner_module.BUCKET_WIDTH = planner_module.DEFAULT_KERNEL, DEFAULT_WIDTH
     row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k])),
                      "scanned_median": int(np.median(scanned[k])),
-                     "cpu_over_buckets_median_of_paired_ratios": round(float(np.median(ratio[k])), 3)}
-                 for k in KERNELS}
+                     "cpu_over_reference_median_of_paired_ratios": round(float(np.median(ratio[k])), 3)}
+                 for k in names}
+    row["reference"] = ref
     row["cost_mismatches"] = cost_mismatch
     return row
 
@@ -225,7 +242,8 @@ def controller_step_times(cm: Costmap, plan_path: np.ndarray, goal: tuple[float,
     return times
 
 
-def main() -> None:
+def parse_args() -> argparse.Namespace:
+    """The command line, with the experiment overrides applied to the planner module."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=100)
     ap.add_argument("--size", type=int, default=2000)
@@ -236,6 +254,8 @@ def main() -> None:
     ap.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
     ap.add_argument("--no-peer", action="store_true", help="skip pyastar2d")
     ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (chains vs buckets)")
+    ap.add_argument("--ab-width", type=float, metavar="W",
+                    help="paired A/B of the default kernel at the default bucket width vs at W (implies --ab)")
     ap.add_argument("--chain-cap", type=int, help="override planner.CHAIN_CAP (experiments)")
     ap.add_argument("--chain-reach", type=float, help="override planner.CHAIN_REACH (experiments)")
     args = ap.parse_args()
@@ -243,8 +263,17 @@ def main() -> None:
         planner_module.CHAIN_CAP = args.chain_cap
     if args.chain_reach is not None:
         planner_module.CHAIN_REACH = args.chain_reach
+    if args.ab_width is not None:
+        if not args.ab_width > 0:
+            ap.error(f"--ab-width must be > 0, got {args.ab_width}")
+        args.ab = True
     if args.ab:
         args.no_peer = True
+    return args
+
+
+def main() -> None:
+    args = parse_args()
     try:
         import pyastar2d  # noqa: F401
         use_peer = not args.no_peer
@@ -253,12 +282,16 @@ def main() -> None:
         use_peer = False
     fp = load_footprint()
     planner = GlobalPlanner(PlannerConfig(heuristic_weight=args.weight))
+    variants = ab_variants(args.ab_width)
     results: dict = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
                      "load_avg_at_start": os.getloadavg()[0], "pairs": args.pairs, "size": args.size,
                      "resolution": RES, "peer": "pyastar2d" if use_peer else None,
                      "planner": {"heuristic_weight": planner.cfg.heuristic_weight,
                                  "cost_travel_multiplier": planner.cfg.cost_travel_multiplier},
-                     "settings_m": {k: list(SETTINGS[k]) for k in args.settings}, "densities": {}}
+                     "settings_m": {k: list(SETTINGS[k]) for k in args.settings}, "densities": {},
+                     "bucket_width": DEFAULT_WIDTH}
+    if args.ab:
+        results["ab_variants"] = {k: {"kernel": v[0], "bucket_width": v[1]} for k, v in variants.items()}
     t_compile = time.perf_counter()
     warm = Costmap(CostmapConfig(obstacle_layer=False, footprint=fp))
     warm.set_static_map(GridMap(np.zeros((50, 50), np.int8), RES))
@@ -282,11 +315,11 @@ def main() -> None:
         for name in args.settings:
             pairs = pick_pairs(cm, args.pairs, rng, *SETTINGS[name])
             if args.ab:
-                r = row[name] = run_ab(cm, planner, pairs)
+                r = row[name] = run_ab(cm, planner, pairs, variants)
                 print(f"density {row['obstacle_density']:.2f} {name:4s}: " + " | ".join(
                     f"{k} CPU ms median {r[k]['cpu_ms']['median']:.2f} p95 {r[k]['cpu_ms']['p95']:.2f} "
-                    f"(x{r[k]['cpu_over_buckets_median_of_paired_ratios']} buckets, paired), pops "
-                    f"{r[k]['pops_median']}, scanned {r[k]['scanned_median']}" for k in KERNELS)
+                    f"(x{r[k]['cpu_over_reference_median_of_paired_ratios']} {r['reference']}, paired), pops "
+                    f"{r[k]['pops_median']}, scanned {r[k]['scanned_median']}" for k in variants)
                     + f" | cost mismatches {r['cost_mismatches']}", flush=True)
                 continue
             r = row[name] = run_setting(cm, planner, peer, pairs)

@@ -20,10 +20,12 @@ from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
 
 # f range of one bucket of the cost-optimal search's queue (cells × traversal factor). Buckets are popped last in,
-# first out (the tie-break among equal f, see _search.astar_buckets), which needs narrow buckets: with 1.0 LIFO
-# re-opened so many cells that it expanded more than FIFO; 1/16 with LIFO beat 1.0 with FIFO by 7-17 % total
-# time on all six bench settings (38 % fewer expansions on 10 % near pairs), 1/32 and 1/64 no better.
-BUCKET_WIDTH = 1.0 / 16
+# first out (the tie-break among equal f, see _search.astar_buckets). Before the chained kernel, 1/16 measured best
+# (7-17 % faster than 1.0 with FIFO; 1/32 and 1/64 no better). With it, wider buckets are slightly faster: median
+# paired time ratio of 1/2 to 1/16 over the six bench settings 0.94-0.97 (100 pairs each) and 0.97-1.00
+# (`planner_bench.py --ab-width 0.0625 --pairs 40`), both on a machine loaded by a test run; 1/4 and 1.0 within 2 %
+# of 1/2; the bucket kernel level (0.97-0.99). The same costs on every pair.
+BUCKET_WIDTH = 1.0 / 2
 # The cost-optimal kernel: "chains" expands uniform cost-0 cells by scans (_chain), "buckets" puts every cell
 # through the queue (_search.astar_buckets). Same cost; see the README's planner section for the measured A/B.
 DEFAULT_KERNEL = "chains"
