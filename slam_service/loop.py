@@ -140,6 +140,7 @@ class SlamLoop:
         self._last_stamp = 0.0  # latest scan stamp processed
         self._last_tf_wall = -math.inf
         self._map_dirty = self._has_map()
+        self._publishing = False  # a map taken for /map (no longer dirty) not yet handed to DDS: see idle()
         self._map_clock, self._map_wall = -math.inf, -math.inf
         self.counters: dict[str, int] = collections.Counter()
         # always in the status, also when 0: "no scan was dropped" is the claim the status must show
@@ -193,6 +194,8 @@ class SlamLoop:
                 self.counters["worker_errors"] += 1
                 log.exception("scan processing failed: %s", exc)
                 continue
+            finally:
+                self._queue.done()
             if upd is not None:
                 self.counters["scans_processed"] += 1
                 if self._on_scan_done is not None:
@@ -303,7 +306,11 @@ class SlamLoop:
                 return
             grid = self.engine.map()
             self._map_dirty = False
-        self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
+            self._publishing = True
+        try:
+            self._map_pub.publish(grid_to_msg(grid, max(now, self._last_stamp), self.frames.map))
+        finally:
+            self._publishing = False
         self._map_clock, self._map_wall = now, wall
         self.counters["maps_published"] += 1
         if self.counters["maps_published"] == 1:  # numba after the first map: nav2 waits for it during boot
@@ -405,7 +412,17 @@ class SlamLoop:
         return {"mode": mode, "integrating": self.integrating, **dict(self.counters),
                 "process_ms_max": round(self.process_ms_max, 1), **pct, "process_ms_window": int(recent.size),
                 "queue_size": self._queue.size, "queue_depth": len(self._queue),
-                "queue_high_water": self._queue.high_water, "nodes": nodes, "engine": engine}
+                "queue_high_water": self._queue.high_water, "nodes": nodes, "engine": engine,
+                "idle": self.idle()}
+
+    def idle(self) -> bool:
+        """Every scan received so far has been dealt with and the map it made is on /map: none queued or in
+        progress, no map change waiting for (or in) its publication. Why: whoever feeds SLAM a recording (a
+        replay) can wait for this instead of a fixed time before it reads what SLAM made of it."""
+        if self._queue.pending():   # first: a scan finishes (and dirties the map) before it stops being pending
+            return False
+        with self.lock:
+            return not self._map_dirty and not self._publishing
 
     def close(self, reason: str = "") -> None:
         self._stop.set()

@@ -28,6 +28,7 @@ class ScanQueue(Generic[T]):
         self._cv = threading.Condition()
         self.dropped = 0  # items pushed out by newer ones while the worker was behind
         self.high_water = 0  # the most items ever waiting at once
+        self._taken = 0  # items handed out by get() whose done() has not come yet
 
     def put(self, item: T) -> bool:
         """Queue ``item`` (arrival = now, monotonic); True when the oldest waiting item had to be dropped."""
@@ -46,7 +47,20 @@ class ScanQueue(Generic[T]):
         with self._cv:
             if not self._items:
                 self._cv.wait(timeout)
-            return self._items.popleft() if self._items else None
+            if not self._items:
+                return None
+            self._taken += 1
+            return self._items.popleft()
+
+    def done(self) -> None:
+        """The worker finished an item from :meth:`get` (processed, skipped or failed)."""
+        with self._cv:
+            self._taken -= 1
+
+    def pending(self) -> int:
+        """Items waiting or taken and not done yet: 0 means every item put has been dealt with."""
+        with self._cv:
+            return len(self._items) + self._taken
 
     def clear(self) -> int:
         """Drop everything waiting (not counted as a drop: pausing discards on purpose); returns how many."""

@@ -5,9 +5,11 @@ two runs with rbnx.replay_eval. No pytest in here (the bench uses it)."""
 
 from __future__ import annotations
 
+import json
 import signal
 import subprocess
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +36,32 @@ service:
 REPLAY_TOPICS = ["/scan", "/odom", "/tf", "/tf_static", "/clock"]
 
 
+def _slam_idle(boot: RbnxBoot) -> Callable[[], bool]:
+    """A predicate: SLAM's status says idle (every scan received dealt with, its map on /map) on two polls in a
+    row with no scan received in between, so scans the replay sent just before it exited are counted too."""
+    from robonix_api import auth
+    from robonix_api.atlas_client import AtlasClient
+    from robonix_api.proto_gen import map_pb2
+    from robonix_api.proto_gen import robonix_contracts_pb2_grpc as stubs
+
+    from .e2e import grpc_endpoint
+
+    with AtlasClient(boot.state()["atlas"]) as client:
+        endpoint = grpc_endpoint(client, "robonix/service/map/get_mode")
+    last: list[int] = []
+
+    def idle() -> bool:
+        with auth.channel(endpoint) as ch:
+            reply = stubs.RobonixServiceMapGetModeStub(ch).GetMode(map_pb2.GetMode_Request(), timeout=30)
+        st = json.loads(reply.detail)
+        received = int(st.get("scans_received", 0))
+        settled = bool(st["idle"]) and last == [received]
+        last[:] = [received] if st["idle"] else []
+        return settled
+
+    return idle
+
+
 def replay_into_fresh_slam(live_mcap: Path, tmp: Path, rate: float = 1.0) -> tuple[Path, dict[str, Any]]:
     """(the replay session's recording, timings); every process started here is stopped here."""
     tmp.mkdir(parents=True, exist_ok=True)
@@ -58,8 +86,8 @@ def replay_into_fresh_slam(live_mcap: Path, tmp: Path, rate: float = 1.0) -> tup
                 info["replay_output"] = r.stdout.strip().splitlines()[-1:] + r.stderr.strip().splitlines()[-3:]
                 if r.returncode != 0:
                     raise AssertionError(f"rbnx replay exited {r.returncode}: {r.stdout}{r.stderr}")
-                # SLAM works off its scan queue and republishes /map when it changed: give it a moment.
-                time.sleep(5.0)
+                # SLAM works off its scan queue and republishes /map when it changed: wait until it has.
+                wait_until(_slam_idle(boot), 120, "SLAM to work off the replayed scans and publish its map", 0.2)
             finally:
                 rec.send_signal(signal.SIGINT)
                 rc = rec.wait(60)

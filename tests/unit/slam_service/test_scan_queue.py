@@ -56,3 +56,20 @@ def test_a_waiting_consumer_gets_each_item_once() -> None:
     th.join(5)
     assert seen == list(range(500))
     assert q.dropped == 0
+
+
+def test_pending_counts_taken_items_until_done() -> None:
+    """An item the worker took is still pending until done(): what SlamLoop.idle() builds on."""
+    q: ScanQueue[int] = ScanQueue(4)
+    assert q.pending() == 0
+    q.put(1)
+    q.put(2)
+    assert q.pending() == 2
+    assert q.get(0.0) is not None
+    assert (len(q), q.pending()) == (1, 2)   # taken, not done: still pending
+    q.done()
+    assert q.pending() == 1
+    assert q.get(0.0) is not None
+    q.done()
+    assert q.get(0.0) is None                # nothing handed out: nothing to be done with
+    assert q.pending() == 0
