@@ -17,13 +17,16 @@ from pathlib import Path
 import pytest
 from support.procs import wait_until
 
-# The child records the signal it got into a file and exits; the parent starts it and then waits forever.
+# The child records the signal it got into a file (atomically) and exits; the parent starts it and then waits
+# forever.
 CHILD = r"""
 import signal, sys, time
 from pathlib import Path
 out = Path(sys.argv[1])
 def got(sig, _frame):
-    out.write_text(signal.Signals(sig).name)
+    part = out.with_suffix(".part")     # written whole, then renamed: the test reads it as soon as it exists
+    part.write_text(signal.Signals(sig).name)
+    part.replace(out)
     sys.exit(0)
 signal.signal(signal.SIGINT, got)
 signal.signal(signal.SIGTERM, got)
