@@ -8,7 +8,11 @@ DDS traffic, and nothing leaves 127.0.0.1. Also makes tests/support (shared help
 Layout: tests/unit/<package> never starts a process, opens a socket or creates a DDS participant;
 tests/integration/<package> (and integration/system for whole deployments) does. Every test under
 tests/integration is marked ``integration`` here, by path, so ``-m "not integration"`` and
-``-m integration`` select either half.
+``-m integration`` select either half; every test under tests/integration/system/abuse is marked ``fuzz``.
+
+Suites (pyproject addopts): the plain ``python -m pytest -q`` deselects ``slow`` and ``container`` tests and
+runs the ``fuzz`` tests at a reduced count; .ci/run then runs ``ROBONIX_FUZZ=full python -m pytest -q -m
+"slow or container or fuzz"``.
 """
 
 import os
@@ -19,6 +23,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parent.parent
 INTEGRATION = REPO / "tests" / "integration"
+FUZZ = INTEGRATION / "system" / "abuse"
 if str(REPO / "tests") not in sys.path:
     sys.path.insert(0, str(REPO / "tests"))
 
@@ -36,7 +41,10 @@ def _maps_root(tmp_path_factory: pytest.TempPathFactory) -> None:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Mark every test under tests/integration ``integration`` (by path, so no file can forget it)."""
+    """Mark every test under tests/integration ``integration`` and under its abuse suite ``fuzz`` (by path,
+    so no file can forget it)."""
     for item in items:
         if item.path.is_relative_to(INTEGRATION):
             item.add_marker(pytest.mark.integration)
+        if item.path.is_relative_to(FUZZ):
+            item.add_marker(pytest.mark.fuzz)

@@ -8,10 +8,12 @@ escapes, 65-character and 70 000-character strings, control characters, deep nes
 from __future__ import annotations
 
 import json
+import os
 from typing import Any
 
 from google.protobuf.descriptor import Descriptor, FieldDescriptor
 from google.protobuf.message import Message
+from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
 SPECIAL_FLOATS = [0.0, -0.0, 1e308, -1e308, 5e-324, 1e6, -1e6, 1e4, float("nan"), float("inf"), float("-inf")]
@@ -28,6 +30,17 @@ INT_RANGES = {
     FieldDescriptor.TYPE_UINT64: (0, 2**64 - 1), FieldDescriptor.TYPE_FIXED64: (0, 2**64 - 1),
 }
 
+
+
+FULL = os.environ.get("ROBONIX_FUZZ", "") == "full"
+
+
+def fuzz_settings(full_count: int) -> settings:
+    """Derandomized hypothesis settings: ``full_count`` examples with ROBONIX_FUZZ=full (the slow run of
+    .ci/run), a fifth of them (at least 5) in the contributor's suite, so both runs try the same first inputs."""
+    n = full_count if FULL else max(5, full_count // 5)
+    return settings(max_examples=n, deadline=None, derandomize=True, database=None,
+                    suppress_health_check=list(HealthCheck))
 
 def hostile_text(extra: list[str] | None = None) -> st.SearchStrategy[str]:
     return st.one_of(st.sampled_from(SPECIAL_STRINGS + (extra or [])), st.text(max_size=40),

@@ -11,7 +11,7 @@ from typing import Any
 
 import grpc
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from hal_panda_mobile.config import HalConfig
@@ -22,15 +22,14 @@ from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 from slam_service.config import ProviderConfig as SlamConfig
 
 from .deployment import CONFIGS, Deployment
-from .strategies import config_json_texts
+from .strategies import config_json_texts, fuzz_settings
 
 pytestmark = pytest.mark.integration
 DRIVER = "robonix/lifecycle/driver"
 INIT, ACTIVATE, DEACTIVATE = 0, 1, 2
 KEYS = {"abuse_hal": list(HalConfig.model_fields), "abuse_mapping": list(SlamConfig.model_fields),
         "abuse_nav": list(NavConfig.model_fields)}
-EXAMPLES = settings(max_examples=30, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=list(HealthCheck))
+EXAMPLES = fuzz_settings(30)
 SLOW: list[str] = []
 COMMANDS = st.one_of(st.sampled_from([INIT, INIT, ACTIVATE, DEACTIVATE]),
                      st.integers(0, 2**32 - 1).filter(lambda c: c != 3))

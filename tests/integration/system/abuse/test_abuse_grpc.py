@@ -11,7 +11,7 @@ from typing import Any
 
 import grpc
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from robonix_api import auth
@@ -19,7 +19,7 @@ from robonix_api.contracts import load_catalogue
 from robonix_api.proto_gen import atlas_pb2, robonix_contracts_pb2
 
 from .deployment import Deployment
-from .strategies import requests
+from .strategies import fuzz_settings, requests
 
 pytestmark = pytest.mark.integration
 
@@ -29,8 +29,7 @@ CLEAR = {grpc.StatusCode.INVALID_ARGUMENT, grpc.StatusCode.FAILED_PRECONDITION, 
 SKIP = {"robonix/lifecycle/driver"}  # driven in test_abuse_driver (commands change the provider's state)
 #: Mostly as a token holder (so the handlers behind the token check are exercised), sometimes without.
 WITH_TOKEN = st.sampled_from([True, True, True, False])
-EXAMPLES = settings(max_examples=60, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=list(HealthCheck))
+EXAMPLES = fuzz_settings(60)
 
 
 def _call(channel: grpc.Channel, path: str, req_cls: Any, resp_cls: Any) -> Callable[[Any], Any]:

@@ -11,17 +11,16 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from robonix_api import auth
 
 from .deployment import Deployment
-from .strategies import schema_value
+from .strategies import fuzz_settings, schema_value
 
 pytestmark = pytest.mark.integration
-EXAMPLES = settings(max_examples=25, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=list(HealthCheck))
+EXAMPLES = fuzz_settings(25)
 
 
 class McpActor:
