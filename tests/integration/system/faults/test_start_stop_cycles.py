@@ -30,7 +30,7 @@ from atlas.server import AtlasServer
 from rbnx.atlas_rpc import CMD, Atlas, Driver, driver_capability
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(300)]
 
 REPO = Path(__file__).resolve().parents[4]
 PROVIDER = REPO / "examples" / "minimal" / "odom_primitive"

@@ -15,7 +15,7 @@ from support.replay_roundtrip import replay_into_fresh_slam
 
 from rbnx.replay_eval import compare, load_run
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(900)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(900)]
 
 
 def test_demo_recording_replays_into_a_fresh_slam_with_the_same_map_and_trajectory(tmp_path: Path) -> None:
