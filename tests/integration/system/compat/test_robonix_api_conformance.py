@@ -25,7 +25,7 @@ import google.protobuf
 import grpc
 import pytest
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 HERE = Path(__file__).resolve().parent
 WHEEL = "robonix-api==0.1.0rc1"

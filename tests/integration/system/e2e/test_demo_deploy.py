@@ -76,6 +76,7 @@ def _run_demo(tmp_path: Path, *args: str, timeout: float = 240) -> subprocess.Co
                           capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
 
 
+@pytest.mark.slow
 def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     out = tmp_path / "demo"
     r = _run_demo(tmp_path, "--goals", "1", "--rtf", "2", "--scene", "kitchen", "--out", str(out))
@@ -107,6 +108,7 @@ def test_demo_one_goal_writes_map_and_summary(tmp_path: Path) -> None:
     assert not left, left
 
 
+@pytest.mark.slow
 def test_demo_sigint_mid_goal_shuts_down_and_exits_130(tmp_path: Path) -> None:
     out = tmp_path / "demo"
     log = tmp_path / "demo.out"

@@ -21,7 +21,7 @@ from rbnx.boot.statefile import state_path
 from rbnx.demo.boot import pick_domain_id
 from robonix_api.procs import pid_alive
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420)]
 KITCHEN_GOAL = (5.8, 3.0)  # the kitchen's island_east waypoint, 2.9 m from the start pose
 
 

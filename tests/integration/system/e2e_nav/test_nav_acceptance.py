@@ -30,7 +30,7 @@ from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 
 from .conftest import ACTIVATE, DEACTIVATE, HAL, INIT, NAV, SLAM, Proc, wait_until
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 NS = "robonix/service/navigation/"
 SIM = "robonix/primitive/sim/"
 M = "robonix/service/map/"

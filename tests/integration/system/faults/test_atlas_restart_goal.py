@@ -11,7 +11,7 @@ import pytest
 from support.faults import KITCHEN, Recorder, SimBoot, signal_pid
 from support.procs import alive, wait_until
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420)]
 
 
 def test_atlas_restart_during_a_goal_goal_succeeds(tmp_path: Path) -> None:

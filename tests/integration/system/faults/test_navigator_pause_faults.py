@@ -13,7 +13,7 @@ import pytest
 from support.faults import KITCHEN, STOPPED_MPS, Recorder, SimBoot, deploy_copy, signal_pid
 from support.procs import wait_until
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420)]
 
 # Sim seconds from the fault to the robot at rest. The issue's figure (<= 1 s) is measured by
 # bench/fault_suite.py on a quiet machine (0.84-0.87 s); here the loss is noticed through the writers' DDS lease,

@@ -26,7 +26,7 @@ from robonix_common.grid import GridMap
 
 from .faultutil import navigate, sim_boot
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420)]
 
 KITCHEN_GOAL = (5.8, 3.0)
 BACK_GOAL = (3.2, 2.0)

@@ -25,7 +25,7 @@ from robonix_api.types import LifecycleState
 
 from .faultutil import navigate, sim_boot
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420)]
 
 ENTRIES = ("panda_mobile", "mapping", "nav2")
 KITCHEN_GOAL = (5.8, 3.0)

@@ -15,7 +15,7 @@ from support.boot import rbnx_cmd
 from support.browser import free_port
 from support.procs import wait_until
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(300)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(300)]
 
 MINIMAL = Path(__file__).resolve().parents[4] / "examples" / "minimal" / "deploy.yaml"
 

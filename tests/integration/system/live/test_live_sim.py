@@ -29,7 +29,7 @@ from support.procs import wait_until
 
 from robonix_api.dds import DdsNode, LaserScan, OccupancyGrid, Odometry, TFMessage
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(600)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(600)]
 
 REPO = Path(__file__).resolve().parents[4]
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"

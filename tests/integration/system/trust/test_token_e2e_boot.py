@@ -21,7 +21,7 @@ from robonix_api.auth import TOKEN_ENV
 from robonix_api.proto_gen import atlas_pb2, atlas_pb2_grpc, lifecycle_pb2, navigation_pb2
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rc
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(600)]
+pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(600)]
 
 SIM_DEPLOY = REPO / "examples" / "sim" / "deploy.yaml"
 STATUS = "robonix/service/navigation/navigate/status"
