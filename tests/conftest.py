@@ -21,6 +21,8 @@ from pathlib import Path
 
 import pytest
 
+from rbnx.boot.entry import numba_cache_dir
+
 REPO = Path(__file__).resolve().parent.parent
 INTEGRATION = REPO / "tests" / "integration"
 FUZZ = INTEGRATION / "system" / "abuse"
@@ -30,6 +32,10 @@ if str(REPO / "tests") not in sys.path:
 # A domain id per test run (0..232 is Cyclone's valid range with the default port mapping).
 os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 200))
 os.environ.setdefault("CYCLONEDDS_URI", (REPO / "config" / "cyclonedds_loopback.xml").as_uri())
+# One numba cache for this process and every child, the one `rbnx boot` gives its children: without it the
+# test process and the providers a test starts itself compile into __pycache__ while booted ones compile
+# into the user cache, so a cold run paid the planner kernels' compile twice.
+os.environ.setdefault("NUMBA_CACHE_DIR", str(numba_cache_dir(dict(os.environ))))
 
 
 @pytest.fixture(scope="session", autouse=True)
