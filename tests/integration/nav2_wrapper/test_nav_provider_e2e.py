@@ -81,6 +81,7 @@ def system(procs) -> Iterator[System]:  # type: ignore[no-untyped-def]
     assert "loop iteration failed" not in log, log[-4000:]
 
 
+@pytest.mark.slow  # a long live-sim drive: the slow suite of .ci/run
 def test_navigate_to_reachable_goal(system: System) -> None:
     t0 = system.gt().sim_time
     node = DdsNode(name="nav_test")
@@ -135,6 +136,7 @@ def test_bad_goals_rejected_with_reason(system: System) -> None:
     assert abs(g.wz) < 0.05, (g.vx, g.vy, g.wz)
 
 
+@pytest.mark.slow  # a long live-sim drive: the slow suite of .ci/run
 def test_preempt_then_cancel_stops_the_base(system: System) -> None:
     first = system.navigate(*BEDROOM_2)
     assert first.accepted, first.detail

@@ -386,6 +386,7 @@ def rbnx(deployment: Deployment, *args: str) -> subprocess.CompletedProcess[str]
                           capture_output=True, timeout=600)
 
 
+@pytest.mark.slow  # dozens of rbnx CLI runs against the deployment: the slow suite of .ci/run
 @pytest.mark.timeout(900)
 def test_a_person_at_a_terminal(deployment: Deployment) -> None:
     deploy = deployment.state["deploy"]
