@@ -13,8 +13,12 @@ from robonix_eval.slam_loop import ROUTES
 GAP_BOXES = {"south": (8.0, 5.6, 0.6, 1.1), "north": (8.0, 6.4, 0.6, 1.1)}
 
 
-@pytest.mark.parametrize(("std", "dropout", "nav_map"), [(0.02, 0.02, "ground_truth"), (0.03, 0.05, "ground_truth"),
-                                                   (0.03, 0.05, "slam")])
+# The whole-route drives on the ground-truth map are long: the slow suite of .ci/run; the noisiest lidar on
+# the SLAM map stays in the fast suite.
+@pytest.mark.parametrize(("std", "dropout", "nav_map"), [
+    pytest.param(0.02, 0.02, "ground_truth", marks=pytest.mark.slow),
+    pytest.param(0.03, 0.05, "ground_truth", marks=pytest.mark.slow),
+    (0.03, 0.05, "slam")])
 def test_apartment_route_with_noisy_lidar(std: float, dropout: float, nav_map: str) -> None:
     pipe = Pipeline(PipelineOptions(scene="apartment", seed=0, nav_map=nav_map,  # type: ignore[arg-type]
                                     lidar_noise=LidarNoise(noise_std=std, dropout_prob=dropout)))
