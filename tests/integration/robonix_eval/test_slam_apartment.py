@@ -24,6 +24,9 @@ import pytest
 
 from robonix_eval.slam_loop import SlamLoopResult, run_slam_loops
 
+# ~58 m scripted drives for every seed (109 s of fixture setup at load ~10): the slow suite of .ci/run
+pytestmark = pytest.mark.slow
+
 HARD_SEEDS = (0, 1, 2)
 Pair = tuple[SlamLoopResult, SlamLoopResult]
 
