@@ -133,3 +133,16 @@ def test_hostile_map_yaml_is_invalid_argument_naming_the_key(slam: Slam, old: st
         slam.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="hostile", mode="localization"), timeout=60)
     assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value.details()
     assert field in info.value.details(), info.value.details()
+
+
+def test_non_finite_config_json_is_refused_by_the_driver(slam: Slam) -> None:
+    """Issue 37 item 5 at the Driver: NaN in config_json fails the RPC naming the field; state unchanged."""
+    assert slam.proc.driver(DEACTIVATE) == (True, "inactive", "")
+    try:
+        for value in (float("nan"), float("inf")):
+            with pytest.raises(grpc.RpcError) as info:
+                slam.proc.driver(INIT, {"map_dir": str(slam.map_dir), "map_publish_period_s": value})
+            assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value.details()
+            assert info.value.details().startswith("config_json: map_publish_period_s: must be a finite number")
+    finally:
+        assert slam.proc.driver(ACTIVATE) == (True, "active", "")  # still the INIT it had
