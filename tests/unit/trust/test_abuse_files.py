@@ -151,3 +151,10 @@ def test_symlinked_map_folder_and_oversized_yaml_are_refused(tmp_path: Path) -> 
         fh.truncate(1 << 30)
     with pytest.raises(MapFileError, match="more than the"):
         load_map_yaml(folder / "map.yaml")
+
+
+def test_robot_description_dev_zero_is_refused_before_reading() -> None:
+    from nav2_wrapper.robot_io import RobotDescriptionError, load_robot
+
+    with pytest.raises(RobotDescriptionError, match="not a regular file"):
+        load_robot("/dev/zero")
