@@ -106,7 +106,7 @@ def load_map_yaml(path: str | os.PathLike[str], image_root: str | os.PathLike[st
         raise MapFileError(f"{path}: mode: must be trinary, scale or raw, got {mode[:40]!r}")
     img_path = _image_path(path, meta["image"], Path(image_root) if image_root is not None else None)
     if not img_path.is_file():
-        raise MapFileError(f"{path}: image: {img_path} is not a regular file")
+        raise MapFileError(f"{path}: image: cannot read image {img_path}: no such regular file")
     try:
         with Image.open(img_path) as im:
             w, h = im.size  # from the header: nothing decoded yet
@@ -117,7 +117,7 @@ def load_map_yaml(path: str | os.PathLike[str], image_root: str | os.PathLike[st
     except (OSError, UnidentifiedImageError, Image.DecompressionBombError, ValueError, SyntaxError) as exc:
         if isinstance(exc, MapFileError):
             raise
-        raise MapFileError(f"{path}: image: cannot read {img_path}: {exc}") from exc
+        raise MapFileError(f"{path}: image: cannot read image {img_path}: {exc}") from exc
     pix = pix[::-1]  # image row 0 is the top of the map
     if mode == "raw":
         data = np.where(pix > 100, UNKNOWN, pix).astype(np.int8)
