@@ -6,12 +6,14 @@ Validated with pydantic so that every error names the field at fault (``dynamic_
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from robonix_api.config_types import FrameName, OptionalTopicName
+from robonix_api.safefile import UnsafeFileError, read_capped
 from robonix_api.validation import Seconds, field_errors, per_role
 from robonix_nav_data import resources
 
@@ -79,6 +81,30 @@ class ProviderConfig(_M):
     @property
     def params_source(self) -> str | Path:
         return self.resolve_path(self.params_file) if self.params_file.strip() else self.params_profile
+
+    def params_text(self) -> str | None:
+        """The params file's text, read safely (a regular file under :func:`params_roots`, at most
+        :data:`PARAMS_MAX_BYTES`, size checked before reading); None for a built-in profile.
+        UnsafeFileError names ``params_file``."""
+        if not self.params_file.strip():
+            return None
+        raw = read_capped(self.resolve_path(self.params_file), PARAMS_MAX_BYTES, "params_file", params_roots())
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise UnsafeFileError(f"params_file: {self.params_file[:200]} is not UTF-8 text") from None
+
+
+#: A Nav2 params YAML is a few kB; this leaves room for heavily commented files.
+PARAMS_MAX_BYTES = 1 << 20
+PARAMS_ROOTS_ENV = "ROBONIX_PARAMS_ROOTS"
+
+
+def params_roots() -> list[Path]:
+    """Where ``params_file`` may live: the package root, plus the folders of ``$ROBONIX_PARAMS_ROOTS``
+    (``os.pathsep``-separated), so a Driver call cannot make the provider read any file of the machine."""
+    extra = [Path(p).expanduser() for p in os.environ.get(PARAMS_ROOTS_ENV, "").split(os.pathsep) if p.strip()]
+    return [PKG_ROOT, *extra]
 
 
 def parse_config(cfg: dict[str, Any] | None) -> ProviderConfig:

@@ -26,6 +26,7 @@ from robonix_api import Deferred, Err, Service
 from robonix_api.dds import Path as PathMsg
 from robonix_api.dds import Twist
 from robonix_api.hosting import INIT_FAILED, SessionHost, serve_contracts
+from robonix_api.safefile import UnsafeFileError
 
 from .config import ConfigError, ProviderConfig, parse_config
 from .handlers import NavHandlers
@@ -71,6 +72,10 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
             cfg = parse_config(config)
         except ConfigError as exc:
             return Err(f"config: {exc}")
+        try:  # before anything else: a Driver call must not make us read /dev/zero or a 20 GB file
+            params_text = cfg.params_text()
+        except UnsafeFileError as exc:
+            return Err(str(exc))
         fp_path = cfg.resolve_path(cfg.robot_description)
         try:
             robot = load_robot(fp_path)
@@ -81,7 +86,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         except MissingUpstream as exc:
             return Deferred(str(exc))
         try:
-            params = load_params(cfg.params_source, map_topic=bindings["map"].topic,
+            params = load_params(cfg.params_source, text=params_text, map_topic=bindings["map"].topic,
                                  odom_topic=bindings["odom"].topic,
                                  scan_topic=bindings["scan"].topic if "scan" in bindings else "",
                                  footprint=robot.footprint, limits=robot.limits)

@@ -13,6 +13,7 @@ import numpy as np
 import yaml
 
 from nav2_wrapper.core.footprint import Footprint
+from robonix_api.safefile import UnsafeFileError, read_capped
 from robonix_nav_data import resources
 
 ROBOT_YAML = resources.robot_description()
@@ -43,12 +44,15 @@ class NavRobot:
     limits: RobotLimits | None = None      # None: the description has no ``limits:`` section
 
 
+#: A robot description is a few hundred bytes.
+ROBOT_MAX_BYTES = 256 * 1024
+
 def load_robot(path: str | Path = ROBOT_YAML) -> NavRobot:
     """Footprint and limits from a robot description; RobotDescriptionError names what is wrong."""
     path = Path(path)
-    try:
-        desc = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
+    try:  # a regular file of bounded size, checked before reading (a Driver call may name /dev/zero)
+        desc = yaml.safe_load(read_capped(path, ROBOT_MAX_BYTES, str(path)))
+    except (UnsafeFileError, yaml.YAMLError) as exc:
         raise RobotDescriptionError(f"{path}: cannot read: {exc}") from exc
     if not isinstance(desc, dict) or "footprint" not in desc:
         raise RobotDescriptionError(f"{path}: footprint: missing")

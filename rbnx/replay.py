@@ -11,6 +11,7 @@ SLAM is not confused by the recorded run's own map->odom.
 
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -78,7 +79,27 @@ class Replayer:
             reader = Reader(self.path)
             reader.open()
         except Exception as exc:
-            raise ReplayError(f"{self.path}: cannot read: {exc}") from None
+            salvaged = self._salvage()
+            if salvaged is None:
+                raise ReplayError(f"{self.path}: cannot read: {exc}") from None
+            return salvaged
+        return reader
+
+    def _salvage(self) -> Any:
+        """A recording whose writer was killed has no footer: replay the messages that survived, with a
+        one-line warning (None when the file is not such an MCAP, or nothing survived)."""
+        if self.path.is_dir() or self.path.suffix != ".mcap":
+            return None
+        from rbnx.mcap_salvage import SalvageReader
+
+        try:
+            reader = SalvageReader(self.path)
+        except Exception:  # not MCAP at all (bad magic): the indexed reader's error stands
+            return None
+        if not reader.truncated or not reader.messages_found:
+            return None
+        print(f"rbnx replay: warning: {self.path} is truncated (its recorder did not finish it); replaying the "
+              f"{reader.messages_found} messages that survived", file=sys.stderr, flush=True)
         return reader
 
     def run(self, stop: threading.Event | None = None,

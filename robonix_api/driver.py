@@ -21,6 +21,7 @@ from robonix_api import telemetry
 from robonix_api.proto_gen import lifecycle_pb2, robonix_contracts_pb2_grpc
 from robonix_api.result import Deferred, Err, Ok
 from robonix_api.validation import ERROR_MAX
+from robonix_common.finite_json import non_finite_message
 
 log = logging.getLogger(__name__)
 
@@ -116,6 +117,9 @@ def parse_config_json(text: str) -> dict[str, Any]:
     if not isinstance(value, dict):
         log.warning("config_json is a JSON %s, not an object; using {}", type(value).__name__)
         return {}
+    bad = non_finite_message(value)
+    if bad:
+        raise ValueError(f"config_json: {bad}")
     return value
 
 

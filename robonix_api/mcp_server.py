@@ -32,6 +32,7 @@ from robonix_api.grpc_contracts import MESSAGE_MAX, StatusError, check_strings, 
 from robonix_api.mcp_tools import MCP_PATH, tool_shape
 from robonix_api.netutil import bind_listener
 from robonix_api.tool import build_input, wire_output_for_json
+from robonix_common.finite_json import non_finite_message
 
 log = logging.getLogger(__name__)
 
@@ -47,12 +48,13 @@ def session_limits() -> dict[str, Any]:
     """Keyword arguments for ``streamable_http_app``: idle expiry and a per-server session cap, so a
     flood of ``initialize`` calls cannot grow a server's memory without bound. A bad environment value
     falls back to the default with a warning (a limit must never be switched off by a typo)."""
-    idle = _env_number("ROBONIX_MCP_SESSION_IDLE_S", DEFAULT_SESSION_IDLE_S, float)
-    cap = _env_number("ROBONIX_MCP_MAX_SESSIONS", DEFAULT_MAX_SESSIONS, int)
+    idle = env_number("ROBONIX_MCP_SESSION_IDLE_S", DEFAULT_SESSION_IDLE_S, float)
+    cap = env_number("ROBONIX_MCP_MAX_SESSIONS", DEFAULT_MAX_SESSIONS, int)
     return {"session_idle_timeout": idle, "max_sessions": cap}
 
 
-def _env_number(name: str, default: Any, kind: type) -> Any:
+def env_number(name: str, default: Any, kind: type) -> Any:
+    """A positive finite number from the environment, else ``default`` (with a warning for a bad value)."""
     raw = os.environ.get(name, "").strip()
     if not raw:
         return default
@@ -157,6 +159,9 @@ class McpToolServer:
         refused = token_refusal(ctx, tool.spec.id, tool.name)
         if refused:
             return _tool_error(refused)
+        bad = non_finite_message(dict(params.arguments or {}))
+        if bad:
+            return _tool_error(f"{tool.name}: {bad}")
         # Handlers are plain blocking functions; keep the event loop free.
         return await anyio.to_thread.run_sync(tool.call, dict(params.arguments or {}))
 

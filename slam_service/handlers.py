@@ -17,10 +17,10 @@ import grpc
 
 from robonix_api import StatusError
 from robonix_api.proto_gen import map_pb2
-from robonix_api.validation import require_finite, require_range
+from robonix_api.validation import clip_message, require_finite, require_range
 from slam_service.core import SlamEngine
 from slam_service.map_paths import check_note, clip
-from slam_service.maps import MapIdError, MapStore, MapStoreError, check_id, load_engine
+from slam_service.maps import MapIdError, MapInvalidError, MapStore, MapStoreError, check_id, load_engine
 from slam_service.render import render_map_png
 
 log = logging.getLogger("slam_service.handlers")
@@ -107,6 +107,9 @@ class MapHandlers:
         pose = (req.x, req.y, req.theta) if req.has_initial_pose else None
         try:
             engine = load_engine(s.setup.store, s.setup.slam, map_id, mode, pose)
+        except MapInvalidError as exc:
+            log.warning("load_map: %s", exc)
+            raise StatusError(grpc.StatusCode.INVALID_ARGUMENT, clip_message(str(exc))) from None
         except (MapStoreError, ValueError) as exc:
             log.warning("load_map: %s", exc)
             return map_pb2.LoadMap_Response(ok=False, detail=str(exc))

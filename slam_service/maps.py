@@ -49,12 +49,18 @@ LIST_MAX_BYTES = 1 << 20
 #: meta.json larger than this is not read (a hand-written or legacy file must not blow up list_maps).
 META_MAX_BYTES = 64 * 1024
 
-__all__ = ["Autosave", "LoadedMap", "MapDirError", "MapIdError", "MapStore", "MapStoreError", "check_id", "load_engine",
+__all__ = ["Autosave", "LoadedMap", "MapDirError", "MapIdError", "MapInvalidError", "MapStore", "MapStoreError",
+           "check_id", "load_engine",
            "resume_engine"]
 
 
 class MapStoreError(RuntimeError):
     """A save/load/delete failed; the message says which file and why."""
+
+
+class MapInvalidError(MapStoreError):
+    """A saved map's files are not a usable map (bad YAML value, image outside its folder, too large):
+    the caller's argument is at fault, answered INVALID_ARGUMENT naming the file and the key."""
 
 
 _id_locks: dict[tuple[str, str], threading.Lock] = {}
@@ -188,12 +194,14 @@ class MapStore:
 
     def load(self, map_id: str, with_session: bool) -> LoadedMap:
         folder = self.path(map_id)
+        if folder.is_symlink():  # a saved map is a real folder; a link may lead anywhere on the machine
+            raise MapInvalidError(f"map_id: {folder} is a symbolic link, not a map folder of {self.root}")
         if not folder.is_dir():
             raise MapStoreError(f"no map {map_id!r} in {self.root}")
         try:
-            grid = load_map_yaml(folder / MAP_YAML)
+            grid = load_map_yaml(folder / MAP_YAML, image_root=folder)
         except MapFileError as exc:
-            raise MapStoreError(str(exc)) from None
+            raise MapInvalidError(str(exc)) from None
         session = None
         if with_session:
             if not (folder / SESSION).is_file():

@@ -3,13 +3,15 @@
 Routes: ``/`` the page (package data in ``static/``), ``/ws`` pushes a JSON snapshot whenever the state
 changed (at most every ``MIN_PUSH_S``) and at least every ``MAX_PUSH_S`` (≥ 5 Hz), ``/api/map.png`` the current
 map image (the page fetches it only when the map's version changed), ``POST /api/goal`` ``{x, y, yaw}``,
-``POST /api/cancel``, ``POST /api/lifecycle`` ``{provider, command}``. Binds 127.0.0.1 by default.
+``POST /api/cancel``, ``POST /api/lifecycle`` ``{provider, command}``. Binds 127.0.0.1 by default;
+who may use it (Host/Origin allow-lists, JSON only, the access key of the printed URL): :mod:`rbnx.dashboard.guard`.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import socket
 import threading
 from importlib import resources
 from typing import Any
@@ -21,7 +23,10 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route, WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from rbnx.dashboard.guard import Guard, new_key
 from rbnx.dashboard.state import DashboardError, LiveState
+from robonix_api.netutil import host_port
+from robonix_common.finite_json import non_finite_message
 
 MIN_PUSH_S = 0.04
 MAX_PUSH_S = 0.2  # >= 5 updates/s also when nothing moves (the page shows it is live)
@@ -42,11 +47,23 @@ async def _body(request: Request) -> dict[str, Any]:
         raise DashboardError("body: must be a JSON object") from None
     if not isinstance(body, dict):
         raise DashboardError("body: must be a JSON object")
+    bad = non_finite_message(body)
+    if bad:
+        raise DashboardError(bad)
     return body
 
-def _action(fn: Any) -> Any:
-    """A POST handler that runs ``fn(body)`` off the event loop and answers its result as JSON."""
+
+def _refused(why: tuple[int, str]) -> Response:
+    return JSONResponse({"error": why[1]}, status_code=why[0])
+
+
+def _action(guard: Guard, fn: Any) -> Any:
+    """A POST handler (Host/Origin, JSON content type and the access key checked) that runs ``fn(body)``
+    off the event loop and answers its result as JSON."""
     async def handler(request: Request) -> Response:
+        refused = await guard.refusal(request, post=True)
+        if refused:
+            return _refused(refused)
         try:
             body = await _body(request)
             result = await asyncio.to_thread(fn, body)
@@ -56,14 +73,38 @@ def _action(fn: Any) -> Any:
     return handler
 
 
-def build_app(state: LiveState) -> Starlette:
-    pages = {path: (_static(name), mime) for path, (name, mime) in STATIC.items()}
-
+def _page(guard: Guard, pages: dict[str, tuple[bytes, str]]) -> Any:
+    """The page code (Host/Origin checked); ``/`` also wants the key, and ``/?token=KEY`` (the printed URL)
+    hands the key over as a cookie and redirects to ``/``."""
     async def page(request: Request) -> Response:
+        refused = await guard.host_refusal(request)
+        if refused:
+            return _refused(refused)
+        if request.url.path == "/":
+            token = request.query_params.get("token")
+            if token is not None:  # the printed URL: hand the key over as a cookie, drop it from the address
+                if not guard.authorized_key(token):
+                    return _refused((403, "wrong dashboard access key: open the URL `rbnx dashboard` printed"))
+                return Response(status_code=303, headers={"Location": "/", "Set-Cookie": guard.cookie_header(),
+                                                          "Cache-Control": "no-store"})
+            if not guard.authorized(request):
+                return _refused((401, "dashboard access key required: open the URL printed by `rbnx dashboard` "
+                                      "(.../?token=...)"))
         body, mime = pages[request.url.path]
         return Response(body, media_type=mime, headers={"Cache-Control": "no-store"})
 
-    async def map_png(_request: Request) -> Response:
+    return page
+
+
+def build_app(state: LiveState, guard: Guard) -> Starlette:
+    pages = {path: (_static(name), mime) for path, (name, mime) in STATIC.items()}
+
+    page = _page(guard, pages)
+
+    async def map_png(request: Request) -> Response:
+        refused = await guard.refusal(request)
+        if refused:
+            return _refused(refused)
         img = state.map_image()
         if img is None:
             return JSONResponse({"error": "no map yet"}, status_code=404)
@@ -83,6 +124,9 @@ def build_app(state: LiveState) -> Starlette:
         return state.lifecycle(provider, str(body.get("command", "")))
 
     async def ws(socket: WebSocket) -> None:
+        if await guard.refusal(socket):  # foreign Origin/Host or no key: no handshake, no live map
+            await socket.close(code=1008)
+            return
         await socket.accept()
         seen = -1
         try:
@@ -96,9 +140,9 @@ def build_app(state: LiveState) -> Starlette:
 
     routes = [Route(p, page) for p in STATIC] + [
         Route("/api/map.png", map_png),
-        Route("/api/goal", _action(goal), methods=["POST"]),
-        Route("/api/cancel", _action(lambda _b: state.cancel()), methods=["POST"]),
-        Route("/api/lifecycle", _action(lifecycle), methods=["POST"]),
+        Route("/api/goal", _action(guard, goal), methods=["POST"]),
+        Route("/api/cancel", _action(guard, lambda _b: state.cancel()), methods=["POST"]),
+        Route("/api/lifecycle", _action(guard, lifecycle), methods=["POST"]),
         WebSocketRoute("/ws", ws),
     ]
     return Starlette(routes=routes)
@@ -108,25 +152,32 @@ class DashboardServer:
     """LiveState + uvicorn; ``start()`` serves from a background thread (for boot/demo --dashboard),
     `rbnx dashboard` waits on ``running()``."""
 
-    def __init__(self, state: LiveState, host: str = "127.0.0.1", port: int = 8765) -> None:
+    def __init__(self, state: LiveState, host: str = "127.0.0.1", port: int = 8765, key: str | None = None) -> None:
         self.state = state
-        config = uvicorn.Config(build_app(state), host=host, port=port, log_level="warning",
+        self.host = host
+        self.key = key or new_key()
+        self._sock = _listen(host, port)  # bound now: the allow-lists carry the real port
+        self.port = self._sock.getsockname()[1]
+        self.guard = Guard(host, self.port, self.key)
+        config = uvicorn.Config(build_app(state, self.guard), host=host, port=self.port, log_level="warning",
                                 ws="websockets-sansio", lifespan="off")
         self.server = uvicorn.Server(config)
         self._thread: threading.Thread | None = None
 
     @property
+    def base_url(self) -> str:
+        """``http://HOST:PORT/`` (without the key)."""
+        return f"http://{host_port(self.host, self.port)}/"
+
+    @property
     def url(self) -> str:
-        servers = getattr(self.server, "servers", None) or []
-        for srv in servers:
-            for sock in srv.sockets:
-                host, port = sock.getsockname()[:2]
-                return f"http://{host}:{port}/"
-        return f"http://{self.server.config.host}:{self.server.config.port}/"
+        """The URL to open: it carries the access key once, the page then holds it in a cookie."""
+        return f"{self.base_url}?token={self.key}"
 
     def start(self, timeout: float = 10.0) -> str:
         self.state.start()
-        self._thread = threading.Thread(target=self.server.run, name="dashboard-http", daemon=True)
+        self._thread = threading.Thread(target=self.server.run, kwargs={"sockets": [self._sock]},
+                                        name="dashboard-http", daemon=True)
         self._thread.start()
         ev = threading.Event()
         while not self.server.started and self._thread.is_alive():
@@ -146,4 +197,18 @@ class DashboardServer:
         self.server.should_exit = True
         if self._thread is not None:
             self._thread.join(10.0)
+        self._sock.close()
         self.state.close()
+
+
+def _listen(host: str, port: int) -> socket.socket:
+    """A TCP socket bound to ``host:port`` (OSError naming them when taken)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as exc:
+        sock.close()
+        raise OSError(f"dashboard could not listen on {host}:{port}: {exc.strerror or exc}") from None
+    return sock

@@ -36,10 +36,12 @@ from mcp_types.version import MODERN_PROTOCOL_VERSIONS
 
 from rbnx.atlas_rpc import Atlas, AtlasError
 from rbnx.gateway.control import ControlError, LifecycleControl
+from rbnx.gateway.quota import DEFAULT_ANON_SESSIONS, SessionQuota
 from robonix_api import auth
-from robonix_api.mcp_server import AsgiServer, session_limits
+from robonix_api.mcp_server import AsgiServer, env_number, session_limits
 from robonix_api.mcp_tools import MCP_PATH
 from robonix_api.proto_gen import atlas_pb2
+from robonix_common.finite_json import non_finite_message
 
 log = logging.getLogger("rbnx.gateway")
 
@@ -125,7 +127,15 @@ class Gateway:
     # ------------------------------------------------------------------ serving
     def start(self, timeout_s: float = 30.0, sock: socket.socket | None = None) -> str:
         """Serve (on ``sock`` when given: a socket bound and listening already); returns the URL."""
-        app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host, **session_limits())
+        limits = session_limits()
+        holder_cap = limits["max_sessions"]
+        anon_cap = min(holder_cap, env_number("ROBONIX_MCP_MAX_ANON_SESSIONS", DEFAULT_ANON_SESSIONS, int))
+        if auth.current_token():  # each identity its own quota; the SDK's cap bounds the sum
+            limits["max_sessions"] = holder_cap + anon_cap
+        app = self._server.streamable_http_app(streamable_http_path=MCP_PATH, host=self.host, **limits)
+        manager = self._server.session_manager
+        app = SessionQuota(app, lambda: manager._server_instances,  # the SDK keeps its open sessions there
+                           anon_cap=anon_cap, holder_cap=holder_cap)
         self._http = AsgiServer(app, host=self.host, name="mcp-gateway")
         port = self._http.start(timeout_s, sock=sock)
         self.url = f"http://{self.host}:{port}{MCP_PATH}"
@@ -251,6 +261,9 @@ class Gateway:
         refused = self._token_refusal(ctx, name)
         if refused:
             return _text_result(refused, error=True)
+        bad = non_finite_message(args)
+        if bad:  # forwarded on, NaN would arrive as null, i.e. 0
+            return _text_result(f"{name}: {bad}", error=True)
         if name in LIFECYCLE_TOOLS:
             return await anyio.to_thread.run_sync(self._lifecycle, name, args)
         tool = self._tools.get(name)

@@ -30,8 +30,17 @@ def dash() -> Iterator[Any]:
     server.stop()
 
 
-def _post(url: str, body: bytes) -> tuple[int, dict[str, Any]]:
-    req = urllib.request.Request(url, data=body, headers={"Content-Type": "application/json"}, method="POST")
+def _auth(dash: Any) -> dict[str, str]:
+    return {"Authorization": f"Bearer {dash.key}"}
+
+
+def _get(dash: Any, path: str) -> Any:
+    return urllib.request.urlopen(urllib.request.Request(dash.base_url + path, headers=_auth(dash)), timeout=30)
+
+
+def _post(dash: Any, path: str, body: bytes) -> tuple[int, dict[str, Any]]:
+    req = urllib.request.Request(dash.base_url + path, data=body, method="POST",
+                                 headers={"Content-Type": "application/json", **_auth(dash)})
     try:
         with urllib.request.urlopen(req, timeout=30) as r:
             return r.status, json.loads(r.read())
@@ -49,7 +58,7 @@ def _post(url: str, body: bytes) -> tuple[int, dict[str, Any]]:
     ("api/lifecycle", b'{"provider": "mapping", "command": "reboot"}', "command: must be activate or deactivate"),
 ])
 def test_bad_requests_get_400_naming_the_field(dash: Any, path: str, body: bytes, message: str) -> None:
-    status, data = _post(dash.url + path, body)
+    status, data = _post(dash, path, body)
     assert status == 400, data
     assert message in data["error"], data
 
@@ -57,12 +66,12 @@ def test_bad_requests_get_400_naming_the_field(dash: Any, path: str, body: bytes
 def test_page_and_map_png(dash: Any) -> None:
     from PIL import Image
 
-    with urllib.request.urlopen(dash.url, timeout=30) as r:
+    with _get(dash, "") as r:
         assert b'<canvas id="map"' in r.read()
-    with urllib.request.urlopen(dash.url + "app.js", timeout=30) as r:
+    with _get(dash, "app.js") as r:
         assert b"new WebSocket" in r.read()
     with pytest.raises(urllib.error.HTTPError) as err:
-        urllib.request.urlopen(dash.url + "api/map.png", timeout=30)
+        _get(dash, "api/map.png")
     assert err.value.code == 404
 
     grid = OccupancyGrid(header=header(1.0, "map"))
@@ -77,7 +86,7 @@ def test_page_and_map_png(dash: Any) -> None:
 
         def png() -> bytes | None:
             try:
-                with urllib.request.urlopen(dash.url + "api/map.png", timeout=30) as r:
+                with _get(dash, "api/map.png") as r:
                     return r.read()
             except urllib.error.HTTPError:
                 return None
@@ -96,7 +105,8 @@ def test_websocket_pushes_the_tf_pose(dash: Any) -> None:
     with DdsNode(name="dash_tf") as node:
         StaticTfBroadcaster(node).send("map", "odom", 1.0, 0.0, 0.0)
         tf = TfBroadcaster(node)
-        with connect(dash.url.replace("http", "ws") + "ws", open_timeout=30) as ws:
+        with connect(dash.base_url.replace("http", "ws") + "ws", open_timeout=30,
+                     additional_headers=_auth(dash)) as ws:
             def pose() -> dict[str, float] | None:
                 tf.send("odom", "base_link", 0.5, 0.25, 0.0, 2.0)
                 snap = json.loads(ws.recv(timeout=5))

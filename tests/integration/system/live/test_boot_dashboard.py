@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 from pathlib import Path
@@ -36,8 +37,10 @@ def test_boot_dashboard_shows_the_boots_providers(tmp_path: Path) -> None:
     try:
         wait_until(lambda: "2/2 entries ready" in out.read_text() or proc.poll() is not None, 120, "the boot")
         assert proc.poll() is None, out.read_text()
-        assert f"dashboard at http://127.0.0.1:{port}/" in out.read_text()
-        with connect(f"ws://127.0.0.1:{port}/ws", open_timeout=30) as ws:
+        printed = re.search(rf"dashboard at (http://127\.0\.0\.1:{port}/\?token=(\S+))", out.read_text())
+        assert printed, out.read_text()
+        with connect(f"ws://127.0.0.1:{port}/ws", open_timeout=30,  # the key of the printed URL
+                     additional_headers={"Authorization": f"Bearer {printed.group(2)}"}) as ws:
             def states() -> dict[str, str] | None:
                 try:
                     snap = json.loads(ws.recv(timeout=5))

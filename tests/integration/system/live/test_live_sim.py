@@ -14,6 +14,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
 import signal
 import subprocess
 import threading
@@ -159,7 +160,10 @@ def dashboard(sim: dict[str, Any]) -> Iterator[str]:
     try:
         wait_until(lambda: "dashboard at" in log.read_text() or proc.poll() is not None, 60, "dashboard to listen")
         assert proc.poll() is None, log.read_text()
-        yield f"http://127.0.0.1:{port}/"
+        printed = re.search(r"dashboard at (\S+)", log.read_text())
+        assert printed, log.read_text()
+        assert printed.group(1).startswith(f"http://127.0.0.1:{port}/?token="), log.read_text()
+        yield printed.group(1)  # the printed URL: it hands the page its access key
     finally:
         proc.send_signal(signal.SIGINT)
         try:

@@ -114,3 +114,35 @@ def test_poses_out_of_range_are_refused(slam: Slam) -> None:
         assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT
         assert info.value.details().startswith(field + ":")
     wait_until(lambda: slam.rpc("get_mode").GetMode(map_pb2.GetMode_Request(), timeout=30).ok, 30, "SLAM answering")
+
+
+@pytest.mark.parametrize(("old", "new", "field"), [
+    ("origin:\n- ", "origin:\n- .nan\n#- ", "origin[0]: must be a finite number"),  # was: loaded, Navigate INTERNAL
+    ("resolution: 0.05", "resolution: 1.0e-300", "resolution: must be"),  # was INTERNAL TypeError
+    ("image: map.pgm", "image: ../../../../../../etc/hostname", "outside the map folder"),
+])
+def test_hostile_map_yaml_is_invalid_argument_naming_the_key(slam: Slam, old: str, new: str, field: str) -> None:
+    """Issue 37 item 7 through the real provider: every such map was loaded or crashed INTERNAL."""
+    saved = slam.rpc("save_map").SaveMap(map_pb2.SaveMap_Request(map_id="hostile"), timeout=60)
+    assert saved.ok, saved.detail
+    yaml_path = slam.map_dir / "hostile" / "map.yaml"
+    text = yaml_path.read_text()
+    assert old in text, text
+    yaml_path.write_text(text.replace(old, new, 1))
+    with pytest.raises(grpc.RpcError) as info:
+        slam.rpc("load_map").LoadMap(map_pb2.LoadMap_Request(map_id="hostile", mode="localization"), timeout=60)
+    assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value.details()
+    assert field in info.value.details(), info.value.details()
+
+
+def test_non_finite_config_json_is_refused_by_the_driver(slam: Slam) -> None:
+    """Issue 37 item 5 at the Driver: NaN in config_json fails the RPC naming the field; state unchanged."""
+    assert slam.proc.driver(DEACTIVATE) == (True, "inactive", "")
+    try:
+        for value in (float("nan"), float("inf")):
+            with pytest.raises(grpc.RpcError) as info:
+                slam.proc.driver(INIT, {"map_dir": str(slam.map_dir), "map_publish_period_s": value})
+            assert info.value.code() == grpc.StatusCode.INVALID_ARGUMENT, info.value.details()
+            assert info.value.details().startswith("config_json: map_publish_period_s: must be a finite number")
+    finally:
+        assert slam.proc.driver(ACTIVATE) == (True, "active", "")  # still the INIT it had
