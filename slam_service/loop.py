@@ -108,12 +108,14 @@ class SlamLoop:
                  on_change: Callable[[], None] | None = None,
                  autosave: Callable[[Any], None] | None = None, autosave_period_s: float = 2.0,
                  resume_map_to_odom: tuple[float, float, float] | None = None,
-                 on_scan_done: Callable[[ScanTiming], None] | None = None) -> None:
+                 on_scan_done: Callable[[ScanTiming], None] | None = None,
+                 on_tf: Callable[[tuple[float, float, float], float], None] | None = None) -> None:
         self.frames, self.bindings = frames, bindings
         self.map_id = map_id  # the saved map this session runs on ("" = a new map)
         self._on_map = on_map  # after each /map publication, with the grid (telemetry)
         self._on_change = on_change  # after the map was replaced or reset (lifecycle announcements)
         self._on_scan_done = on_scan_done  # per processed scan, on the worker thread (benches)
+        self._on_tf = on_tf  # each map->odom sent (kept for a crash-restart: slam_service.continuity)
         self.engine = engine
         self.lock = threading.RLock()  # guards the engine (worker, RPC handlers, publisher)
         self.integrating = False
@@ -275,6 +277,8 @@ class SlamLoop:
     def _send_tf(self, stamp: float) -> None:
         x, y, th = (float(v) for v in self._m2o)
         self._tf_out.send(self.frames.map, self.frames.odom, x, y, th, stamp)
+        if self._on_tf is not None:
+            self._on_tf((x, y, th), stamp)
         self._last_tf_wall = time.monotonic()
         self.counters["tf_sent"] += 1
 
