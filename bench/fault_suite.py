@@ -99,7 +99,8 @@ def run_case(target: str, kind: str, rtf: str, tmp: Path, scene: str = "kitchen"
     out: dict[str, Any] = {"target": target, "kind": kind, "fault": fault, "scene": scene}
     goal, next_goal = SCENE_GOALS[scene]
     map_dir = tmp / "maps"
-    with SimBoot(tmp, scene=scene, rtf=rtf, env={"ROBONIX_MAP_DIR": str(map_dir)}) as boot:
+    env = {"ROBONIX_MAPS_ROOT": str(map_dir), "ROBONIX_MAP_DIR": str(map_dir)}
+    with SimBoot(tmp, scene=scene, rtf=rtf, env=env) as boot:
         run_id = boot.navigate(*goal)
         rec = Recorder(boot, run_id).start()
         before = None

@@ -21,6 +21,7 @@ from hal_panda_mobile.persist import SimContinuity
 from hal_panda_mobile.sim import PandaMobileSim, SimConfigError
 from robonix_api import Err, Primitive
 from robonix_api.dds.messages import LaserScan, Odometry, Twist
+from robonix_api.dds.writer_trust import TAG_PREFIX, WriterTrust
 from robonix_api.hosting import SessionHost, serve_contracts
 from robonix_api.runstate import restarts
 
@@ -97,7 +98,16 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
                        command_lag_bound_s=cfg.command_lag_bound_s, continuity=continuity)
         outputs.publish_static(robot.lidar.mount, sim.time if cfg.use_sim_time else 0.0)
 
+        trust = self._writer_trust(cfg)
+
         def on_twist(msg: Twist) -> None:
+            if trust is not None and not trust.allowed(getattr(getattr(msg, "sample_info", None),
+                                                               "publication_handle", None)):
+                loop.stats.extra["cmd_vel_refused"] = loop.stats.extra.get("cmd_vel_refused", 0) + 1
+                if loop.stats.extra["cmd_vel_refused"] in (1, 10, 100, 1000):
+                    log.warning("/cmd_vel from a writer outside the deployment refused (%d so far; "
+                                "cmd_vel_writers: deployment)", loop.stats.extra["cmd_vel_refused"])
+                return
             loop.cmd_vel(float(msg.linear.x), float(msg.linear.y), float(msg.angular.z),
                          vz=float(msg.linear.z), wx=float(msg.angular.x), wy=float(msg.angular.y))
 
@@ -113,6 +123,19 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
 
     def deactivate(self, work: SimLoop) -> None:
         work.deactivate()
+
+    def _writer_trust(self, cfg: HalConfig) -> WriterTrust | None:
+        """The /cmd_vel writer check of ``cmd_vel_writers`` (None: every writer may command the base)."""
+        mode = cfg.cmd_vel_writers
+        if mode == "any":
+            return None
+        trust = WriterTrust.for_deployment(self.prim.dds_node().participant)
+        if trust is None and mode == "deployment":
+            log.warning("cmd_vel_writers: deployment, but no deployment token (ROBONIX_DEPLOY_TOKEN) is set: "
+                        "no writer can be told apart, every /cmd_vel is refused")
+            return WriterTrust(self.prim.dds_node().participant, TAG_PREFIX + b"(no token: matches no writer)")
+        log.info("/cmd_vel accepted from %s", "the deployment's writers only" if trust else "any writer")
+        return trust
 
     # ------------------------------------------------------------------ topics
     def _check_topics(self, cfg: HalConfig) -> None:
