@@ -105,7 +105,7 @@ def run_case(target: str, kind: str, rtf: str, tmp: Path, scene: str = "kitchen"
         rec = Recorder(boot, run_id).start()
         before = None
         try:
-            wait_until(rec.moving, 60, "the robot to drive the goal", 0.05)
+            wait_until(rec.moving, 300, "the robot to drive the goal", 0.05)  # a cold numba cache: minutes
             time.sleep(1.0 if scene == "kitchen" else 8.0)  # well under way (far goals: mapped a good part)
             if target == "mapping" and kind == "kill":
                 before = _save_map(boot, "before", map_dir)
