@@ -40,7 +40,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests"))
 RESULTS = REPO / "bench" / "results" / "fault_suite.json"
 
-from support.faults import KITCHEN, TERMINAL, Recorder, SimBoot, signal_pid  # noqa: E402
+from support.faults import KITCHEN, TERMINAL, Recorder, SimBoot, occupied_iou, signal_pid  # noqa: E402
 from support.procs import wait_until  # noqa: E402
 
 TARGETS = ("panda_mobile", "mapping", "nav2", "atlas")
@@ -81,19 +81,6 @@ def _save_map(boot: SimBoot, name: str, map_dir: Path) -> Any:
     return load_map_yaml(map_dir / name / "map.yaml") if r.ok else None
 
 
-def _iou(a: Any, b: Any) -> float:
-    """Occupied-cell (>= 65) IoU of two grids of one resolution, in world cells."""
-    import numpy as np
-
-    def cells(g: Any) -> set[tuple[int, int]]:
-        rows, cols = np.nonzero(g.data >= 65)
-        ox, oy = round(g.origin_x / g.resolution), round(g.origin_y / g.resolution)
-        return set(zip((cols + ox).tolist(), (rows + oy).tolist(), strict=True))
-
-    ca, cb = cells(a), cells(b)
-    return len(ca & cb) / max(1, len(ca | cb))
-
-
 def run_case(target: str, kind: str, rtf: str, tmp: Path, scene: str = "kitchen") -> dict[str, Any]:
     fault = "SIGKILL" if kind == "kill" else f"SIGSTOP {STOP_S:g} s + SIGCONT"
     out: dict[str, Any] = {"target": target, "kind": kind, "fault": fault, "scene": scene}
@@ -121,7 +108,7 @@ def run_case(target: str, kind: str, rtf: str, tmp: Path, scene: str = "kitchen"
             out["recovery_s"] = recovered
             if before is not None and recovered is not None:
                 after = _save_map(boot, "after", map_dir)
-                out["map_iou"] = round(_iou(before, after), 3) if after is not None else None
+                out["map_iou"] = round(occupied_iou(before, after), 3) if after is not None else None
             final = _wait_final(boot, run_id, 240 if scene != "kitchen" else 150)
             out["goal_final"], out["goal_detail"] = final
             out["goal_continued"] = final[0] == "SUCCEEDED"

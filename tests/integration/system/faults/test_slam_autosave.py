@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.e2e import grpc_endpoint, wait_until
+from support.faults import occupied_iou
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
@@ -30,19 +31,6 @@ pytestmark = [pytest.mark.integration, pytest.mark.timeout(420)]
 
 KITCHEN_GOAL = (5.8, 3.0)
 BACK_GOAL = (3.2, 2.0)
-
-
-def occupied_iou(a: GridMap, b: GridMap) -> float:
-    """IoU of the occupied cells (>= 65) of two grids of one resolution, compared in world cells."""
-    assert a.resolution == pytest.approx(b.resolution)
-
-    def cells(g: GridMap) -> set[tuple[int, int]]:
-        rows, cols = np.nonzero(g.data >= 65)
-        ox, oy = round(g.origin_x / g.resolution), round(g.origin_y / g.resolution)
-        return set(zip((cols + ox).tolist(), (rows + oy).tolist(), strict=True))
-
-    ca, cb = cells(a), cells(b)
-    return len(ca & cb) / max(1, len(ca | cb))
 
 
 def nodes_in(session_file: Path) -> int:
