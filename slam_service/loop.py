@@ -30,6 +30,7 @@ from slam_service.config import Frames
 from slam_service.core import Scan, SlamEngine, Update, kernels
 from slam_service.scan_queue import ScanQueue
 
+CLOCK_EPOCH_BACK_S = 1.0  # s a scan's stamp must be behind the last one to count as a new clock epoch
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
 TF_WAIT_S = 0.3  # wall time the worker waits for odom->base at the scan stamp
@@ -241,6 +242,8 @@ class SlamLoop:
             mount = self._mount(frame)
         except TfError as exc:
             return self._skip("scans_no_tf", f"frame_id {frame!r} is not connected to {self.frames.base} ({exc})")
+        if t < self._last_stamp - CLOCK_EPOCH_BACK_S:
+            self._new_clock_epoch(t)
         odom = self._odom_at(t)
         if odom is None:
             return self._skip("scans_no_odom", f"no odometry ({self.frames.odom} -> {self.frames.base}) at t={t:.3f}")
@@ -264,6 +267,20 @@ class SlamLoop:
                 self._map_dirty = True
         self._send_tf(t)
         return upd, process_s, cpu_s
+
+    def _new_clock_epoch(self, t: float) -> None:
+        """Scans stamped well before the last one: the clock started again (a simulator restarted without
+        its saved state). The TF history is of the old epoch (newer stamps: every lookup at the new times
+        fails, "skipped scan: no odometry"), so it is dropped; the next scan re-anchors like after a pause
+        (map->odom kept, the robot placed by today's odometry) instead of being read as an odometry jump."""
+        log.warning("scan stamped %.2f s, %.2f s before the last one: clock went back (simulator restarted?); "
+                    "TF history dropped, re-anchoring on the next scan", t, self._last_stamp - t)
+        self.tf.clear(keep_static=True)
+        self._odom = None
+        with self.lock:
+            self._last_stamp = t
+            self._resumed, self._resume_m2o = True, None
+        self.counters["clock_epochs"] += 1
 
     def _note_process_time(self, ms: float, cpu_ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
