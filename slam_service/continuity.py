@@ -1,6 +1,6 @@
 """The last map→odom a mapping service published, kept for its crash-restarted successor.
 
-Why (issue 33, crash point): the autosaved session is written every ``autosave_period_s`` (2 s); resuming
+Why (issue 33, crash point): the autosaved session is written every ``autosave_period_s`` (was 2 s); resuming
 from it alone put map→odom where it was at the last autosaved node, while navigation had been driving on
 the map→odom published up to the crash, corrected by every scan since. The difference (scan-matching
 corrections, a loop closure) is a jump of the robot in the map the navigator sees, as if in a new world:

@@ -1,5 +1,5 @@
 """Issue 16: the map survives a crash of the mapping service. Under a real `rbnx boot` of the sim deploy,
-the robot maps part of the kitchen (one goal); mapping's session is autosaved (atomically, every 2 s of
+the robot maps part of the kitchen (one goal); mapping's session is autosaved (atomically, every 0.5 s of
 new data) to <map_dir>/.autosave/<deployment>/mapping/; SIGKILL of mapping; rbnx boot restarts it with RBNX_RESTARTS=1
 and it resumes from the autosave: the occupied cells of the map saved before the kill and of the map saved
 after the restart overlap with IoU >= 0.95 (a restart without the autosave would start an empty map), and
