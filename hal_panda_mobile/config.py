@@ -8,7 +8,7 @@ message starts with the field path, e.g. ``rates.scan_rate_hz: must be > 0``.
 from __future__ import annotations
 
 import dataclasses
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
@@ -83,6 +83,10 @@ class HalConfig(_Model):
     publish_clock: bool = True
     publish_ground_truth: bool = True
     odom_frame_at_start: bool = core_field(SimParams, "odom_frame_at_start")
+    # who may drive the base over /cmd_vel: "deployment" = only writers whose DDS participant carries the
+    # deployment's tag (robonix_api.dds.writer_trust; needs ROBONIX_DEPLOY_TOKEN), "any" = every writer on
+    # the domain (plain ROS 2 interop), "auto" = "deployment" when a deployment token is set, else "any"
+    cmd_vel_writers: Literal["auto", "deployment", "any"] = "auto"
 
     @field_validator("odom_noise", mode="before")
     @classmethod

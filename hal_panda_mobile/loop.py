@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from hal_panda_mobile.outputs import Outputs, Snapshot
+from hal_panda_mobile.persist import SimContinuity
 from hal_panda_mobile.sim import PandaMobileSim
 
 log = logging.getLogger("hal_panda_mobile.loop")
@@ -91,8 +92,9 @@ class SimLoop:
 
     def __init__(self, sim: PandaMobileSim, outputs: Outputs, rates: LoopRates, *, real_time_factor: float,
                  use_sim_time: bool = True, command_lag_bound_s: float = 0.0,
-                 command_wait_max_s: float = COMMAND_WAIT_MAX_S) -> None:
+                 command_wait_max_s: float = COMMAND_WAIT_MAX_S, continuity: SimContinuity | None = None) -> None:
         self.sim, self.outputs, self.rates = sim, outputs, rates
+        self.continuity = continuity  # saves the state a crash-restarted HAL resumes (hal_panda_mobile.persist)
         self.rtf = real_time_factor
         self.command_lag_bound_s = command_lag_bound_s
         self.command_wait_max_s = command_wait_max_s
@@ -148,6 +150,8 @@ class SimLoop:
     def close(self, reason: str = "") -> None:
         """End of the session: stop the loop, then release the DDS writers."""
         self.stop()
+        if self.continuity is not None:
+            self.continuity.discard()  # ended on purpose: a later start is a new run
         st = self.stats
         if st.cmd_waits:
             log.info("waited for /cmd_vel %d times (%.1f s of wall time, %d gave up; command lag bound %.2f s of sim "
@@ -283,8 +287,11 @@ class SimLoop:
                 if max(abs(v) for v in gt[3:]) < REST_SPEED or sim.time >= self._brake_until:
                     self._mode = HELD
                     log.info("braked to rest at sim t=%.3f; holding", sim.time)
+            saved = self.continuity.maybe_save(sim, sim.time) if self.continuity is not None else None
         if snap is not None:
             self.outputs.publish(snap)
+        if saved is not None:
+            self.continuity.write(saved)  # type: ignore[union-attr]
 
     def _snapshot(self, everything: bool) -> Snapshot | None:
         """Read the outputs that are due (all of them with ``everything``) and advance their schedule."""

@@ -17,10 +17,13 @@ from hal_panda_mobile.config import HalConfig, build_sim, parse_config
 from hal_panda_mobile.handlers import SimHandlers
 from hal_panda_mobile.loop import LoopRates, SimLoop
 from hal_panda_mobile.outputs import FrameNames, Outputs
+from hal_panda_mobile.persist import SimContinuity
 from hal_panda_mobile.sim import PandaMobileSim, SimConfigError
 from robonix_api import Err, Primitive
 from robonix_api.dds.messages import LaserScan, Odometry, Twist
+from robonix_api.dds.writer_trust import TAG_PREFIX, WriterTrust
 from robonix_api.hosting import SessionHost, serve_contracts
+from robonix_api.runstate import restarts
 
 log = logging.getLogger("hal_panda_mobile")
 
@@ -55,6 +58,7 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
         self.prim = prim
         self._topics: dict[str, str] = {}  # contract -> topic the atlas settled on (declared once)
         self._requested: dict[str, str] = {}  # contract -> topic the config asked for
+        self._sessions = 0  # only the first session of a restarted process resumes the crashed run
         serve_contracts(prim, SimHandlers(self.current).table())
 
     def prepare(self, config: dict[str, Any]) -> HalSetup | Err:
@@ -71,6 +75,9 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
     def start(self, setup: HalSetup) -> SimLoop:
         cfg, sim = setup.cfg, setup.sim
         robot, prim = sim.robot, self.prim
+        continuity = SimContinuity.for_instance(prim.id, cfg.model_dump(mode="json"))
+        log.info("%s", continuity.resume_into(sim, allowed=restarts() > 0 and self._sessions == 0))
+        self._sessions += 1
         frames = FrameNames(odom=cfg.frames.odom or robot.odom_frame,
                             base_link=cfg.frames.base_link or robot.base_frame,
                             laser=cfg.frames.laser or robot.lidar.frame, world=cfg.frames.world)
@@ -88,10 +95,19 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
                           ground_truth=cfg.rates.ground_truth_rate_hz if cfg.publish_ground_truth else None,
                           hold=cfg.rates.hold_rate_hz)
         loop = SimLoop(sim, outputs, rates, real_time_factor=cfg.real_time_factor, use_sim_time=cfg.use_sim_time,
-                       command_lag_bound_s=cfg.command_lag_bound_s)
+                       command_lag_bound_s=cfg.command_lag_bound_s, continuity=continuity)
         outputs.publish_static(robot.lidar.mount, sim.time if cfg.use_sim_time else 0.0)
 
+        trust = self._writer_trust(cfg)
+
         def on_twist(msg: Twist) -> None:
+            if trust is not None and not trust.allowed(getattr(getattr(msg, "sample_info", None),
+                                                               "publication_handle", None)):
+                loop.stats.extra["cmd_vel_refused"] = loop.stats.extra.get("cmd_vel_refused", 0) + 1
+                if loop.stats.extra["cmd_vel_refused"] in (1, 10, 100, 1000):
+                    log.warning("/cmd_vel from a writer outside the deployment refused (%d so far; "
+                                "cmd_vel_writers: deployment)", loop.stats.extra["cmd_vel_refused"])
+                return
             loop.cmd_vel(float(msg.linear.x), float(msg.linear.y), float(msg.angular.z),
                          vz=float(msg.linear.z), wx=float(msg.angular.x), wy=float(msg.angular.y))
 
@@ -107,6 +123,19 @@ class HalProvider(SessionHost[HalSetup, SimLoop]):
 
     def deactivate(self, work: SimLoop) -> None:
         work.deactivate()
+
+    def _writer_trust(self, cfg: HalConfig) -> WriterTrust | None:
+        """The /cmd_vel writer check of ``cmd_vel_writers`` (None: every writer may command the base)."""
+        mode = cfg.cmd_vel_writers
+        if mode == "any":
+            return None
+        trust = WriterTrust.for_deployment(self.prim.dds_node().participant)
+        if trust is None and mode == "deployment":
+            log.warning("cmd_vel_writers: deployment, but no deployment token (ROBONIX_DEPLOY_TOKEN) is set: "
+                        "no writer can be told apart, every /cmd_vel is refused")
+            return WriterTrust(self.prim.dds_node().participant, TAG_PREFIX + b"(no token: matches no writer)")
+        log.info("/cmd_vel accepted from %s", "the deployment's writers only" if trust else "any writer")
+        return trust
 
     # ------------------------------------------------------------------ topics
     def _check_topics(self, cfg: HalConfig) -> None:

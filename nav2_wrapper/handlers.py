@@ -14,7 +14,7 @@ from typing import Any
 import grpc
 
 from nav2_wrapper.core import GoalRecord
-from nav2_wrapper.core.navigator import FAILED, TERMINAL
+from nav2_wrapper.core.navigator import FAILED, RUNNING, TERMINAL
 from robonix_api import telemetry
 from robonix_api.grpc_contracts import StatusError
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
@@ -28,6 +28,10 @@ NS = "robonix/service/navigation/"
 NAVIGATE, STATUS, CANCEL = NS + "navigate", NS + "navigate/status", NS + "navigate/cancel"
 ADJUST, SET_LIMIT, GET_LIMIT = NS + "adjust_speed", NS + "set_speed_limit", NS + "get_speed_limit"
 INACTIVE = "inactive: navigation is not active (send CMD_ACTIVATE)"
+#: What status says about the run a crashed navigation process was driving, until its successor takes it
+#: up again (never a terminal state that later changes: issue 37 item 8).
+RESTARTING = ("restarting: navigation is starting again after a crash and will take this run up again "
+              "(robot stopped meanwhile)")
 #: Goals farther than this from the map origin are refused before planning (no map is that large).
 MAX_ABS_COORD_M = 10_000.0
 
@@ -51,8 +55,16 @@ def _r(v: float, nd: int = 3) -> float | None:
 class NavHandlers:
     """The contracts' handlers; ``loop()`` is the current session's NavLoop, ``not_ready()`` why there is none."""
 
-    def __init__(self, loop: Callable[[], NavLoop | None], not_ready: Callable[[], str]) -> None:
-        self._loop, self._not_ready = loop, not_ready
+    def __init__(self, loop: Callable[[], NavLoop | None], not_ready: Callable[[], str],
+                 restarting: Callable[[], str] = lambda: "") -> None:
+        """``restarting()``: the run id a crashed predecessor was driving while this process has not taken
+        it up yet ("" otherwise)."""
+        self._loop, self._not_ready, self._restarting = loop, not_ready, restarting
+
+    def _restarting_run(self, run_id: str) -> str:
+        """The run being taken up again after a crash when ``run_id`` (or "" = the latest) asks for it."""
+        rid = self._restarting()
+        return rid if rid and run_id in ("", rid) else ""
 
     def _uninit(self) -> str:
         return f"not initialized: {self._not_ready()}"
@@ -90,6 +102,8 @@ class NavHandlers:
 
     def status(self, req: nav_pb.GetNavigationStatus_Request) -> nav_pb.GetNavigationStatus_Response:
         _, rec, why = self._lookup(req.run_id)
+        if rec is None and self._restarting_run(req.run_id):
+            return nav_pb.GetNavigationStatus_Response(known=True, state=RUNNING, detail=RESTARTING)
         if rec is None:
             return nav_pb.GetNavigationStatus_Response(known=False, state=FAILED, detail=why)
         return nav_pb.GetNavigationStatus_Response(known=True, state=rec.state, detail=rec.detail)
@@ -100,6 +114,9 @@ class NavHandlers:
         same structured: run_id, accepted, goal {x, y, yaw, frame}, distance_remaining_m, recoveries,
         started_s / finished_s (provider clock), speed_limit_percentage. Unknown runs: known=false."""
         loop, rec, why = self._lookup(req.run_id)
+        rid = self._restarting_run(req.run_id) if rec is None else ""
+        if rid:
+            return {"known": True, "state": RUNNING, "detail": RESTARTING, "run_id": rid, "terminal": False}
         if rec is None or loop is None:
             return {"known": False, "state": FAILED, "detail": why, "run_id": req.run_id[:ID_MAX]}
         x, y, yaw = rec.goal

@@ -29,6 +29,7 @@ from .config import Frames
 from .upstream import Binding
 
 log = logging.getLogger("nav2_wrapper.inputs")
+FUTURE_TF_S = 0.5  # clock s a TF sample may be stamped after the clock (delivery order) before it is distrusted
 
 
 @dataclass
@@ -144,6 +145,10 @@ class Inputs:
         f = self.frames
         m_o = self.tf.lookup_transform(f.map, f.odom)
         o_b = self.tf.lookup_transform(f.odom, f.base)
+        if self.clock.use_sim_time and o_b.stamp > now + FUTURE_TF_S:
+            # stamped after the clock: a sample of an earlier clock epoch (the simulator restarted from
+            # t = 0). Its age would read 0 (fresh); it is not where the robot is.
+            raise TfError(f"TF {f.odom}→{f.base} stamped {o_b.stamp:.2f} s, after the clock ({now:.2f} s)")
         pose = compose(m_o.to_pose2d(), o_b.to_pose2d())
         def age(tr: Any) -> float:
             return max(0.0, now - tr.stamp) if tr.stamp > 0.0 else 0.0  # stamp 0: a static link

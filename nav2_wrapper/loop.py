@@ -49,6 +49,7 @@ log = logging.getLogger("nav2_wrapper.loop")
 WAIT_SLICE_S = 0.1  # wall s: how often a waiting loop re-checks /clock stalls and stop requests
 SELF_FREEZE_S = 1.0  # wall s after this process was frozen during which writers' liveliness losses are not trusted
 WATCH_PERIOD_S = 1.0  # wall s between looks at the atlas (TERMINATED notices, re-registrations)
+CLOCK_EPOCH_BACK_S = 1.0  # clock s /clock must go back to count as a new epoch (a restarted simulator)
 LATENCY_LOG_S = 30.0  # clock s between the control-latency lines in the log while driving
 
 
@@ -291,6 +292,9 @@ class NavLoop:
                 return
             now = clock.now()
             try:
+                if clock.use_sim_time and now < self._clock_last - CLOCK_EPOCH_BACK_S:
+                    self._new_clock_epoch(now)
+                    due = now
                 self._watch_clock(now)
                 if reached and not kernels_wait(WAIT_SLICE_S):
                     continue  # a cold numba compile is running: wait outside the lock (status stays answered)
@@ -307,6 +311,22 @@ class NavLoop:
                 with self.lock:
                     self._end_active("navigation loop error (see provider log)", canceled=False)
                 self._stop.wait(0.05)
+
+    def _new_clock_epoch(self, now: float) -> None:
+        """/clock went back (a simulator started again from t = 0, e.g. without its saved state): every
+        TF sample we hold is from another world, stamped in the new clock's future, and would look fresh.
+        Drop them, stop the robot and fail the running goal: its progress cannot be judged from them (issue
+        37: a goal was reported reached 7 m from the robot). The next goal starts on the new epoch's data."""
+        old = self._clock_last
+        log.warning("/clock went back from %.2f s to %.2f s (simulator restarted?): TF dropped, new clock epoch",
+                    old, now)
+        self.inputs.tf.clear(keep_static=True)
+        self._clock_last, self._clock_wall = now, time.monotonic()
+        self._state = None
+        with self.lock:
+            self._end_active(f"simulator restarted: /clock went back from {old:.1f} s to {now:.1f} s; the robot's "
+                             "pose before and after cannot be compared", canceled=False)
+            self.publish_zero()
 
     def _watch_clock(self, now: float) -> None:
         """Checks that must run even when sim time stands still: a /clock not advancing stops the robot at

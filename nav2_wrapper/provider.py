@@ -26,6 +26,7 @@ from robonix_api import Deferred, Err, Service
 from robonix_api.dds import Path as PathMsg
 from robonix_api.dds import Twist
 from robonix_api.hosting import INIT_FAILED, SessionHost, serve_contracts
+from robonix_api.runstate import restarts
 from robonix_api.safefile import UnsafeFileError
 
 from .config import ConfigError, ProviderConfig, parse_config
@@ -60,7 +61,15 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         super().__init__(svc)
         self.svc = svc
         self._plan_topic = ""
-        serve_contracts(svc, NavHandlers(self._loop, lambda: self.not_ready).table())
+        self._journal = GoalJournal.from_env(svc.id)
+        serve_contracts(svc, NavHandlers(self._loop, lambda: self.not_ready, self._restarting_run).table())
+
+    def _restarting_run(self) -> str:
+        """The run a crashed predecessor was driving, while this restarted process has not taken it up."""
+        if restarts() == 0:
+            return ""
+        g = self._journal.pending()
+        return g.run_id if g is not None else ""
 
     def _loop(self) -> NavLoop | None:
         s = self.current()
@@ -107,7 +116,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
 
         watch = UpstreamWatch(self.svc.atlas, self.svc.id, bindings)
         loop = NavLoop(Navigator(params.config), inputs, pubs, cfg, speed, watch,
-                       GoalJournal.from_env(self.svc.id))
+                       self._journal)
         deadline = time.monotonic() + cfg.action_wait_s
         while True:
             missing = inputs.missing()

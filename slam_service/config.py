@@ -73,7 +73,7 @@ class ProviderConfig(_Model):
     slam: dict[str, Any] = Field(default_factory=dict)  # SlamConfig fields
     map_publish_period_s: Seconds = Field(1.0, gt=0)  # rate cap of /map
     tf_period_s: float = Field(0.05, gt=0, le=0.1)  # map->odom republish period (wall): >= 10 Hz
-    autosave_period_s: float = Field(2.0, ge=0, le=3600)  # crash copy of the session (0 = off)
+    autosave_period_s: float = Field(0.5, ge=0, le=3600)  # crash copy (0 = off); a crash loses <= this
     # scans waiting for the worker; oldest dropped beyond. 3 s at 10 Hz: the worker catches up at >= 100 scans/s,
     # so a backlog costs latency for a moment while a short queue (4 = 0.4 s) lost scans to any stall of the host
     # or of the worker (the numba kernels loading after the first map, a busy 2-core machine)

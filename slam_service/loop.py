@@ -30,6 +30,7 @@ from slam_service.config import Frames
 from slam_service.core import Scan, SlamEngine, Update, kernels
 from slam_service.scan_queue import ScanQueue
 
+CLOCK_EPOCH_BACK_S = 1.0  # s a scan's stamp must be behind the last one to count as a new clock epoch
 log = logging.getLogger("slam_service.loop")
 ODOM_FALLBACK_S = 0.1  # latest /odom accepted for a scan this close in time when TF is missing
 TF_WAIT_S = 0.3  # wall time the worker waits for odom->base at the scan stamp
@@ -108,12 +109,14 @@ class SlamLoop:
                  on_change: Callable[[], None] | None = None,
                  autosave: Callable[[Any], None] | None = None, autosave_period_s: float = 2.0,
                  resume_map_to_odom: tuple[float, float, float] | None = None,
-                 on_scan_done: Callable[[ScanTiming], None] | None = None) -> None:
+                 on_scan_done: Callable[[ScanTiming], None] | None = None,
+                 on_tf: Callable[[tuple[float, float, float], float], None] | None = None) -> None:
         self.frames, self.bindings = frames, bindings
         self.map_id = map_id  # the saved map this session runs on ("" = a new map)
         self._on_map = on_map  # after each /map publication, with the grid (telemetry)
         self._on_change = on_change  # after the map was replaced or reset (lifecycle announcements)
         self._on_scan_done = on_scan_done  # per processed scan, on the worker thread (benches)
+        self._on_tf = on_tf  # each map->odom sent (kept for a crash-restart: slam_service.continuity)
         self.engine = engine
         self.lock = threading.RLock()  # guards the engine (worker, RPC handlers, publisher)
         self.integrating = False
@@ -239,6 +242,8 @@ class SlamLoop:
             mount = self._mount(frame)
         except TfError as exc:
             return self._skip("scans_no_tf", f"frame_id {frame!r} is not connected to {self.frames.base} ({exc})")
+        if t < self._last_stamp - CLOCK_EPOCH_BACK_S:
+            self._new_clock_epoch(t)
         odom = self._odom_at(t)
         if odom is None:
             return self._skip("scans_no_odom", f"no odometry ({self.frames.odom} -> {self.frames.base}) at t={t:.3f}")
@@ -263,6 +268,20 @@ class SlamLoop:
         self._send_tf(t)
         return upd, process_s, cpu_s
 
+    def _new_clock_epoch(self, t: float) -> None:
+        """Scans stamped well before the last one: the clock started again (a simulator restarted without
+        its saved state). The TF history is of the old epoch (newer stamps: every lookup at the new times
+        fails, "skipped scan: no odometry"), so it is dropped; the next scan re-anchors like after a pause
+        (map->odom kept, the robot placed by today's odometry) instead of being read as an odometry jump."""
+        log.warning("scan stamped %.2f s, %.2f s before the last one: clock went back (simulator restarted?); "
+                    "TF history dropped, re-anchoring on the next scan", t, self._last_stamp - t)
+        self.tf.clear(keep_static=True)
+        self._odom = None
+        with self.lock:
+            self._last_stamp = t
+            self._resumed, self._resume_m2o = True, None
+        self.counters["clock_epochs"] += 1
+
     def _note_process_time(self, ms: float, cpu_ms: float) -> None:
         """Per-scan cost in the status: a call near the 100 ms scan period is what fills the queue."""
         self.process_ms_max = max(self.process_ms_max, ms)
@@ -275,6 +294,8 @@ class SlamLoop:
     def _send_tf(self, stamp: float) -> None:
         x, y, th = (float(v) for v in self._m2o)
         self._tf_out.send(self.frames.map, self.frames.odom, x, y, th, stamp)
+        if self._on_tf is not None:
+            self._on_tf((x, y, th), stamp)
         self._last_tf_wall = time.monotonic()
         self.counters["tf_sent"] += 1
 

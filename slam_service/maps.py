@@ -290,15 +290,21 @@ AUTOSAVE_DIR = ".autosave"
 
 
 class Autosave:
-    """The running session's crash copy: ``<map_dir>/.autosave/<instance>/session.npz``.
+    """The running session's crash copy: ``<map_dir>/.autosave/<deployment>/<instance>/session.npz``.
+
+    ``deployment`` (``robonix_api.runstate.deployment_key()``: deploy name + atlas address, file-name safe)
+    keeps two deployments sharing a maps root apart: both name their mapping service ``mapping``, and one
+    must never resume the other's map after a crash (issue 37 item 2). "" (not under ``rbnx boot``):
+    ``<map_dir>/.autosave/<instance>/``.
 
     Written atomically (temp file + ``os.replace``), so a kill in the middle leaves the previous copy;
     read back when ``rbnx boot`` restarts the service after a crash (``RBNX_RESTARTS`` > 0). Hidden from
     ``list_maps`` (a dot folder) and never a saved map: ``save_map`` is still how a map is kept.
     """
 
-    def __init__(self, map_dir: str | os.PathLike[str], instance: str) -> None:
-        self.folder = Path(map_dir).expanduser() / AUTOSAVE_DIR / check_id(instance)
+    def __init__(self, map_dir: str | os.PathLike[str], instance: str, deployment: str = "") -> None:
+        base = Path(map_dir).expanduser() / AUTOSAVE_DIR
+        self.folder = (base / check_id(deployment) if deployment else base) / check_id(instance)
         self.path = self.folder / SESSION
 
     def write(self, session: SessionData) -> Path:

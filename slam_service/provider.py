@@ -12,15 +12,16 @@ stops the loop and closes DDS. A failed or deferred INIT leaves the previous ses
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import dataclass
 from typing import Any
 
 from robonix_api import Deferred, Err, Service
 from robonix_api.dds import MapLifecycle, OccupancyGrid
 from robonix_api.hosting import SessionHost, serve_contracts
+from robonix_api.runstate import deployment_key, restarts
 from robonix_api.upstream import Binding, MissingUpstream, resolve_topic
 from slam_service.config import ConfigError, ProviderConfig, load_footprint, parse_config
+from slam_service.continuity import MapToOdomFile
 from slam_service.core import SlamConfig, SlamEngine
 from slam_service.core.numeric import load_in_background
 from slam_service.handlers import MapHandlers
@@ -86,6 +87,7 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         self._announcer: LifecycleAnnouncer | None = None  # robonix/service/map/lifecycle, same lifetime
         self.map_topic = svc.declare_ros2_topic(OCCUPANCY_GRID, MAP_TOPIC, qos=MAP_QOS)
         self.lifecycle_topic = svc.declare_ros2_topic(MAP_LIFECYCLE, LIFECYCLE_TOPIC, qos=MAP_QOS)
+        self._m2o_file = MapToOdomFile.for_instance(svc.id)  # map->odom as last published, for a restart
         serve_contracts(svc, MapHandlers(self.current).table())
 
     def prepare(self, config: dict[str, Any]) -> SlamSetup | Err | Deferred:
@@ -119,10 +121,14 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
                 session = None
             if session is not None:
                 engine, m2o = resume_engine(session, slam_cfg)
-                log.info("restart %d: resumed the autosaved session %s (%d nodes)", restarts(), autosave.path,
-                         session.graph.n_nodes)
+                published = self._m2o_file.last()  # what navigation drove on up to the crash
+                log.info("restart %d: resumed the autosaved session %s (%d nodes); map->odom %s", restarts(),
+                         autosave.path, session.graph.n_nodes,
+                         "as last published" if published is not None else "at the last autosaved node")
+                m2o = published or m2o
         elif autosave is not None:
             autosave.discard()
+            self._m2o_file.discard()
         return SlamSetup(cfg, slam_cfg, store, footprint, bindings, engine, autosave, m2o)
 
     def _autosave_for(self, cfg: ProviderConfig, store: MapStore) -> Autosave | None:
@@ -131,7 +137,7 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         if cfg.mode != "mapping" or cfg.autosave_period_s <= 0:
             return None
         try:
-            return Autosave(store.root, self.svc.id)
+            return Autosave(store.root, self.svc.id, deployment_key())
         except MapIdError:
             log.warning("no autosave: instance id %r is not a plain file name", self.svc.id)
             return None
@@ -152,7 +158,8 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
                         on_map=spans.on_map if spans is not None else None,
                         on_change=lambda: self._announce(holder[0]) if holder else None,
                         autosave=setup.autosave.write if setup.autosave is not None else None,
-                        autosave_period_s=cfg.autosave_period_s, resume_map_to_odom=setup.resume_map_to_odom)
+                        autosave_period_s=cfg.autosave_period_s, resume_map_to_odom=setup.resume_map_to_odom,
+                        on_tf=self._m2o_file.note if setup.autosave is not None else None)
         holder.append(loop)
         self._announce(loop)
         scan, odom = bindings["scan"], bindings["odom"]
@@ -179,14 +186,6 @@ class SlamProvider(SessionHost[SlamSetup, SlamLoop]):
         if s is not None:
             self._announce(s.work, SHUTDOWN)
         return super()._on_shutdown()
-
-
-def restarts() -> int:
-    """How often ``rbnx boot`` restarted this process (``RBNX_RESTARTS``; 0 on a first start)."""
-    try:
-        return max(0, int(os.environ.get("RBNX_RESTARTS", "0") or 0))
-    except ValueError:
-        return 0
 
 
 def _pose_if_known(work: SlamLoop) -> tuple[float, float, float] | None:

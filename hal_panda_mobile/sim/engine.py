@@ -20,7 +20,7 @@ from robonix_common.grid import GridMap
 from .errors import SimConfigError
 from .lidar import Lidar, ScanResult
 from .mjcf import BASE_BODY, LIDAR_SITE, OBSTACLE_PREFIX, build_mjcf, yaw_of
-from .odometry import Odometry, OdomNoise, OdomState
+from .odometry import Odometry, OdomNoise, OdomState, compose, relative
 from .raster import rasterize
 from .robot import RobotDescription
 from .scene import Obstacle, Scene, check_start, first_collision
@@ -181,6 +181,38 @@ class PandaMobileSim:
     def odometry(self) -> OdomState:
         gt = self.ground_truth()
         return self._odom.state(gt[:3], gt[3:], self.time)
+
+    # ----------------------------------------------------------------- crash continuity
+    def resume_state(self) -> dict[str, Any]:
+        """What a restarted simulator needs to go on where this one stopped: sim time (steps), the base's
+        true pose and the odometry's integrated pose (see ``hal_panda_mobile.persist``)."""
+        return {"steps": int(self._steps), "timestep": self.params.timestep, "true": list(self._pose()),
+                "odom": list(self._odom.pose), "odom_last_true": list(self._odom.last_true)}
+
+    def restore(self, state: dict[str, Any], min_time: float = 0.0) -> None:
+        """Continue a saved run: the base at rest at its saved true pose, odometry where it was (its pose
+        extended by the truth's motion since its last tick, so odom→base stays consistent with the truth) and
+        sim time at the saved time or ``min_time``, whichever is later (never behind a clock already seen).
+        SimConfigError when the state does not fit this simulator (timestep, a non-finite pose)."""
+        if abs(float(state["timestep"]) - self.params.timestep) > 1e-12:
+            raise SimConfigError(f"resume: timestep {state['timestep']} differs from {self.params.timestep}")
+        x, y, yaw = (float(v) for v in state["true"])
+        odom = compose(tuple(map(float, state["odom"])),  # type: ignore[arg-type]
+                       relative(tuple(map(float, state["odom_last_true"])), (x, y, yaw)))  # type: ignore[arg-type]
+        steps = max(int(state["steps"]), math.ceil(min_time / self.params.timestep - 1e-9))
+        if not all(math.isfinite(v) for v in (x, y, yaw, *odom)):
+            raise SimConfigError("resume: saved pose is not finite")
+        self.stop()
+        self.data.qpos[:3] = (x, y, yaw)  # no collision check: the base was there (possibly touching a wall)
+        self.data.qvel[:3] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+        self._dirty = False
+        self._active.clear()
+        self._steps = steps
+        self._next_odom = steps + self._odom_every
+        self._next_contact = steps + self._contact_every
+        self.data.time = self.time
+        self._odom.reset(odom, (x, y, yaw), self.time)
 
     # ----------------------------------------------------------------- command
     def _warn_once(self, key: str, msg: str) -> None:

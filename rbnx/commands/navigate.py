@@ -2,7 +2,9 @@
 
 The navigation provider is found through the atlas like any consumer finds it (contracts
 robonix/service/navigation/navigate{,/status,/cancel} over gRPC). `navigate` shows a live progress line
-until the run ends; Ctrl-C cancels the goal before exiting (130). Exit codes: 0 SUCCEEDED (or, for
+until the run ends; Ctrl-C cancels the goal before exiting (130). While navigation (or the atlas) restarts,
+status calls fail: `navigate` keeps following the same run id, looking the provider up again, for up to
+RECONNECT_S seconds (the robot may still be driving: never give up on it silently). Exit codes: 0 SUCCEEDED (or, for
 nav-status/cancel, the call worked); 1 the goal failed/was canceled or the system is unreachable;
 2 bad arguments.
 """
@@ -20,7 +22,10 @@ from typing import Any
 from rbnx.demo.boot import DemoError
 from rbnx.demo.goals import TERMINAL, Goal
 from rbnx.demo.report import LiveLine
-from rbnx.demo.rpc import DemoRpc
+from rbnx.demo.rpc import CANCEL, STATUS, DemoRpc
+
+#: How long `navigate` keeps asking a navigation provider that stopped answering (a restart takes a few s)
+RECONNECT_S = 60.0
 
 
 def register(sub: Any) -> None:
@@ -76,13 +81,26 @@ def run(args: argparse.Namespace) -> int:
 def _follow(rpc: DemoRpc, run_id: str, stop: threading.Event, timeout: float) -> int:
     line = LiveLine()
     t0 = time.monotonic()
+    lost: float | None = None  # when status stopped answering
     while True:
         if stop.is_set() or (timeout and time.monotonic() - t0 > timeout):
             why = "interrupted" if stop.is_set() else f"timeout after {timeout:g}s"
             accepted, detail = rpc.cancel_run(run_id)
             line.done(f"{why}: cancel {'sent' if accepted else 'refused'} ({detail})")
             return 130 if stop.is_set() else 1
-        st = rpc.status(run_id)
+        try:
+            st = rpc.status(run_id)
+        except DemoError as exc:  # navigation (or the atlas) restarting: follow the same run when it is back
+            lost = lost if lost is not None else time.monotonic()
+            if time.monotonic() - lost > RECONNECT_S:
+                raise DemoError(f"{exc} (no answer for {RECONNECT_S:g} s; run {run_id} may still be driving: "
+                                f"rbnx nav-status {run_id})") from None
+            line.update("RECONNECTING", f"RECONNECTING {time.monotonic() - t0:5.1f}s  {exc}")
+            rpc.forget(STATUS)
+            rpc.forget(CANCEL)
+            stop.wait(0.5)
+            continue
+        lost = None
         if not st.known:
             line.done(f"run {run_id}: unknown to the navigation provider ({st.detail})")
             return 1

@@ -90,6 +90,10 @@ class DemoRpc:
         except grpc.RpcError as exc:
             raise DemoError(f"{contract}: {exc.code().name}: {exc.details()}") from None
 
+    def forget(self, contract: str) -> None:
+        """Look ``contract`` up on the atlas again on the next call (its provider restarted elsewhere)."""
+        self._endpoints.pop(contract, None)
+
     def close(self) -> None:
         for ch in self._channels.values():
             ch.close()

@@ -41,6 +41,7 @@ from cyclonedds.util import duration
 from robonix_api.dds.config import DdsConfigError, resolve_config, resolve_domain_id, summarize
 from robonix_api.dds.qos import describe, resolve_qos, writer_qos
 from robonix_api.dds.validate import validate_message
+from robonix_api.dds.writer_trust import participant_qos
 
 log = logging.getLogger(__name__)
 M = TypeVar("M")
@@ -245,7 +246,8 @@ class DdsNode:
         self.domain_id = resolve_domain_id(domain_id)
         self.config_uri, self.config = _acquire_domain(self.domain_id)
         try:
-            self.participant = DomainParticipant(self.domain_id)
+            # USER_DATA carries the deployment's tag when a token is set (robonix_api.dds.writer_trust)
+            self.participant = DomainParticipant(self.domain_id, qos=participant_qos())
         except DDSException as exc:
             _release_domain(self.domain_id)
             raise DdsConfigError(f"cannot create a DDS participant on domain {self.domain_id}: {exc}") from exc

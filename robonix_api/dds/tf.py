@@ -224,10 +224,14 @@ class TfBuffer:
         """Store a planar transform parent -> child (as ``set_transform`` does with a message)."""
         self.set_transform(make_transform(parent, child, x, y, yaw, stamp), static=static)
 
-    def clear(self) -> None:
-        """Forget every stored transform (after a time jump or a reset)."""
+    def clear(self, keep_static: bool = False) -> None:
+        """Forget every stored transform (after a time jump or a reset); ``keep_static`` keeps the static
+        ones (mounts: sent once, transient-local, valid in any clock epoch)."""
         with self._lock:
-            self._links.clear()
+            if keep_static:
+                self._links = {k: v for k, v in self._links.items() if v.static}
+            else:
+                self._links.clear()
 
     def frames(self) -> list[str]:
         """Every frame the buffer knows, sorted."""

@@ -388,6 +388,21 @@ class Recorder:
         return None
 
 
+def occupied_iou(a: Any, b: Any) -> float:
+    """IoU of the occupied cells (>= 65) of two grids of one resolution, compared in world cells."""
+    import numpy as np
+
+    assert math.isclose(a.resolution, b.resolution), (a.resolution, b.resolution)
+
+    def cells(g: Any) -> set[tuple[int, int]]:
+        rows, cols = np.nonzero(g.data >= 65)
+        ox, oy = round(g.origin_x / g.resolution), round(g.origin_y / g.resolution)
+        return set(zip((cols + ox).tolist(), (rows + oy).tolist(), strict=True))
+
+    ca, cb = cells(a), cells(b)
+    return len(ca & cb) / max(1, len(ca | cb))
+
+
 def signal_pid(pid: int, sig: int) -> None:
     with contextlib.suppress(ProcessLookupError):
         os.kill(pid, sig)

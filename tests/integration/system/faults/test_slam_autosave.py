@@ -1,6 +1,6 @@
 """Issue 16: the map survives a crash of the mapping service. Under a real `rbnx boot` of the sim deploy,
-the robot maps part of the kitchen (one goal); mapping's session is autosaved (atomically, every 2 s of
-new data) to <map_dir>/.autosave/mapping/; SIGKILL of mapping; rbnx boot restarts it with RBNX_RESTARTS=1
+the robot maps part of the kitchen (one goal); mapping's session is autosaved (atomically, every 0.5 s of
+new data) to <map_dir>/.autosave/<deployment>/mapping/; SIGKILL of mapping; rbnx boot restarts it with RBNX_RESTARTS=1
 and it resumes from the autosave: the occupied cells of the map saved before the kill and of the map saved
 after the restart overlap with IoU >= 0.95 (a restart without the autosave would start an empty map), and
 a further goal succeeds on the resumed map."""
@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.e2e import grpc_endpoint, wait_until
+from support.faults import occupied_iou
 
 from robonix_api import auth
 from robonix_api.atlas_client import AtlasClient
@@ -30,19 +31,6 @@ pytestmark = [pytest.mark.integration, pytest.mark.slow, pytest.mark.timeout(420
 
 KITCHEN_GOAL = (5.8, 3.0)
 BACK_GOAL = (3.2, 2.0)
-
-
-def occupied_iou(a: GridMap, b: GridMap) -> float:
-    """IoU of the occupied cells (>= 65) of two grids of one resolution, compared in world cells."""
-    assert a.resolution == pytest.approx(b.resolution)
-
-    def cells(g: GridMap) -> set[tuple[int, int]]:
-        rows, cols = np.nonzero(g.data >= 65)
-        ox, oy = round(g.origin_x / g.resolution), round(g.origin_y / g.resolution)
-        return set(zip((cols + ox).tolist(), (rows + oy).tolist(), strict=True))
-
-    ca, cb = cells(a), cells(b)
-    return len(ca & cb) / max(1, len(ca | cb))
 
 
 def nodes_in(session_file: Path) -> int:
@@ -63,7 +51,7 @@ def save_map(atlas: str, map_id: str, map_dir: Path) -> GridMap:
 def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: Path,
                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     map_dir = tmp_path / "maps"
-    autosave = map_dir / ".autosave" / "mapping" / "session.npz"
+    autosaves = map_dir / ".autosave"  # <deployment>/mapping/session.npz: keyed by deployment (issue 37)
     with sim_boot(tmp_path, monkeypatch, ROBONIX_MAP_DIR=str(map_dir)) as run:
         atlas, state_file = run.atlas, run.state_file
 
@@ -72,8 +60,11 @@ def test_mapping_sigkill_resumes_from_its_autosave_and_keeps_the_map(tmp_path: P
         # the robot stands still now: wait until the autosave holds every node of the session saved now
         before = save_map(atlas, "before", map_dir)
         nodes = nodes_in(map_dir / "before" / "session.npz")
-        wait_until(lambda: autosave.is_file() and nodes_in(autosave) == nodes, 15,
-                   f"the autosave to hold all {nodes} nodes")
+        def saved_all() -> bool:
+            found = sorted(autosaves.glob("*/mapping/session.npz"))
+            return len(found) == 1 and nodes_in(found[0]) == nodes
+
+        wait_until(saved_all, 15, f"the autosave to hold all {nodes} nodes")
         assert (before.data >= 65).sum() > 200, "the robot mapped too little for a meaningful comparison"
 
         with AtlasClient(atlas) as client:
