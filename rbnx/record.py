@@ -3,14 +3,22 @@
 Each channel carries ROS 2 CDR (XCDR1 little-endian with its 4-byte encapsulation header, the bytes
 rmw_cyclonedds puts on the wire) and a ``ros2msg`` schema generated from the same IDL struct, so a reader
 needs no ROS install and no knowledge of this project. Log and publish times are the receive time (wall
-clock, ns), as rosbag2 records them; the messages keep their own header stamps (sim time under
-``use_sim_time``), and /clock is recorded as a topic, which is what replay uses as its time base.
+clock, ns, taken per message as it is read off the reader, as rosbag2 stamps each callback); the messages keep
+their own header stamps (sim time under ``use_sim_time``), and /clock is recorded as a topic, which is what
+replay uses as its time base.
+
+The file survives a crash: the chunk in progress is closed and written out every ``flush_s`` (0.5 s), so a
+SIGKILL loses at most that much. Such a file has no summary or footer; mcap's ``NonSeekingReader``
+(``rbnx.record.read_truncated``) and ``rbnx replay`` read it up to the last whole record. ``--format rosbag2``
+(:mod:`rbnx.rosbag2_out`) writes the same file inside a rosbag2 folder with its ``metadata.yaml``.
 """
 
 from __future__ import annotations
 
+import struct
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -28,7 +36,8 @@ _QOS_YAML = ("- history: 1\n  depth: {depth}\n  reliability: {rel}\n  durability
              "  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n"
              "  avoid_ros_namespace_conventions: false\n")
 
-BATCH_S = 0.1  # seconds between passes over the readers (see McapRecorder._run)
+FLUSH_S = 0.5  # seconds between chunk flushes: what a SIGKILL may lose at most
+WAIT_S = 0.2  # longest wait for data, so stop() and the flush timer are noticed
 
 
 def qos_metadata(qos: str) -> str:
@@ -44,15 +53,21 @@ class McapRecorder:
     cyclonedds' ``DataReader.take``, pinned with cyclonedds) and written as they are: no decode and
     re-encode, so the file holds the wire bytes and recording stays cheap. One thread waits on all
     readers and writes, so writes never interleave; ``stop`` ends it before finishing the file.
+    Every sample gets the wall-clock time of the take that read it as log time: the thread wakes as soon as
+    data arrives (no batching), so consecutive messages get distinct receive times.
     """
 
     def __init__(self, output: str | Path | IO[bytes], specs: list[TopicSpec] | tuple[TopicSpec, ...],
-                 domain_id: int | None = None) -> None:
+                 domain_id: int | None = None, flush_s: float = FLUSH_S) -> None:
         self.output = output
         self.specs = list(specs)
         self.domain_id = domain_id
+        self.flush_s = flush_s
         self.counts: dict[str, int] = {s.topic: 0 for s in self.specs}
         self.bytes = 0
+        self.first_ns: int | None = None  # log time of the first and last message written
+        self.last_ns: int | None = None
+        self.flushes = 0
         self._writer: Any = None
         self._fh: IO[bytes] | None = None
         self._node: Any = None
@@ -60,7 +75,7 @@ class McapRecorder:
         self._conds: list[Any] = []
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()  # re-entered by before_finish hooks that read the counts
         self._closed = False
 
     def start(self) -> None:
@@ -87,6 +102,7 @@ class McapRecorder:
             out = self.output
         self._writer = Writer(out)
         self._writer.start(profile="ros2", library="robonix-nav rbnx record")
+        self._writer.flush()  # the header reaches the disk before the first message
         schemas: dict[type, int] = {}
         self._node = node = DdsNode(domain_id=self.domain_id, name="rbnx_record")
         self._waitset = WaitSet(node.participant)
@@ -115,11 +131,11 @@ class McapRecorder:
         from cyclonedds.util import duration
 
         mask = SampleState.Any | ViewState.Any | InstanceState.Any
+        next_flush = time.monotonic() + self.flush_s
+        dirty = False
         while not self._stop.is_set():
-            self._waitset.wait(duration(milliseconds=200))
-            # Batch: one pass over the readers per BATCH_S instead of one wake-up per sample (a 300 Hz
-            # /clock alone would wake us 300 times a second); reader depth 200 covers the wait.
-            self._stop.wait(BATCH_S)
+            wait_s = max(0.001, min(WAIT_S, next_flush - time.monotonic()))
+            self._waitset.wait(duration(seconds=wait_s))
             for reader, channel, topic in self._readers:
                 while True:
                     got = ddspy_take(reader._ref, mask, 64)
@@ -128,12 +144,35 @@ class McapRecorder:
                     now = time.time_ns()
                     with self._lock:
                         for data, info in got:
-                            if not info.valid_data:
-                                continue
-                            self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
-                                                     data=data, sequence=self.counts[topic])
-                            self.counts[topic] += 1
-                            self.bytes += len(data)
+                            if info.valid_data:
+                                self._write(channel, topic, now, data)
+                                dirty = True
+            if time.monotonic() >= next_flush:
+                next_flush = time.monotonic() + self.flush_s
+                if dirty:
+                    with self._lock:
+                        self._writer.flush()
+                        self.flushes += 1
+                    self.flushed()
+                    dirty = False
+
+    def _write(self, channel: int, topic: str, log_ns: int, data: bytes) -> None:
+        """One message (caller holds the lock); log times never go backwards within the file."""
+        if self.last_ns is not None and log_ns < self.last_ns:
+            log_ns = self.last_ns
+        self._writer.add_message(channel_id=channel, log_time=log_ns, publish_time=log_ns, data=data,
+                                 sequence=self.counts[topic])
+        self.counts[topic] += 1
+        self.bytes += len(data)
+        if self.first_ns is None:
+            self.first_ns = log_ns
+        self.last_ns = log_ns
+
+    def flushed(self) -> None:
+        """Called after each periodic flush (outside the lock); the rosbag2 layout rewrites its metadata."""
+
+    def before_finish(self, writer: Any) -> None:
+        """Called with the writer just before its summary is written (the rosbag2 layout adds a record)."""
 
     def stop(self) -> None:
         """End the reading thread, close the DDS entities, then finish the file. Idempotent."""
@@ -154,14 +193,39 @@ class McapRecorder:
                 return
             self._closed = True
             if self._writer is not None:
+                self.before_finish(self._writer)
                 self._writer.finish()
             if self._fh is not None:
                 self._fh.close()
+
+    def duration_s(self) -> float:
+        """Seconds between the first and the last message's log time (0 before two messages)."""
+        with self._lock:
+            return 0.0 if self.first_ns is None or self.last_ns is None else (self.last_ns - self.first_ns) / 1e9
 
     def summary(self) -> str:
         with self._lock:
             parts = ", ".join(f"{t} {n}" for t, n in self.counts.items())
             return f"{sum(self.counts.values())} messages ({self.bytes / 1e6:.1f} MB): {parts}"
+
+
+def read_truncated(path: str | Path) -> Iterator[tuple[Any, Any, Any]]:
+    """(schema, channel, message) of every whole message in an MCAP file, in file order, also when the
+    file was cut short (a recorder killed before it wrote the summary): reading stops at the first
+    incomplete record instead of raising."""
+    from mcap.exceptions import McapError
+    from mcap.reader import NonSeekingReader
+
+    with open(path, "rb") as f:
+        it = NonSeekingReader(f).iter_messages(log_time_order=False)
+        while True:
+            try:
+                item = next(it)
+            except StopIteration:
+                return
+            except (McapError, EOFError, ValueError, struct.error):
+                return
+            yield item
 
 
 def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -> list[TopicSpec]:
