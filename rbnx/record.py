@@ -37,7 +37,6 @@ _QOS_YAML = ("- history: 1\n  depth: {depth}\n  reliability: {rel}\n  durability
              "  avoid_ros_namespace_conventions: false\n")
 
 FLUSH_S = 0.5  # seconds between chunk flushes: what a SIGKILL may lose at most
-WAIT_S = 0.2  # longest wait for data, so stop() and the flush timer are noticed
 
 
 def qos_metadata(qos: str) -> str:
@@ -49,12 +48,10 @@ def qos_metadata(qos: str) -> str:
 class McapRecorder:
     """Subscribes to ``specs`` on a DDS domain and appends every sample to an MCAP file.
 
-    Samples are taken as the serialized bytes Cyclone received (``ddspy_take``, the call under
-    cyclonedds' ``DataReader.take``, pinned with cyclonedds) and written as they are: no decode and
-    re-encode, so the file holds the wire bytes and recording stays cheap. One thread waits on all
-    readers and writes, so writes never interleave; ``stop`` ends it before finishing the file.
-    Every sample gets the wall-clock time of the take that read it as log time: the thread wakes as soon as
-    data arrives (no batching), so consecutive messages get distinct receive times.
+    The samples come from a :class:`rbnx.ddstap.RawTap`: the wire bytes as received, each stamped with its
+    receive time, written as they are. The tap's one thread writes, so writes never interleave; every
+    ``flush_s`` it closes the chunk in progress and flushes it to the file. ``stop`` ends the thread before
+    finishing the file.
     """
 
     def __init__(self, output: str | Path | IO[bytes], specs: list[TopicSpec] | tuple[TopicSpec, ...],
@@ -70,30 +67,17 @@ class McapRecorder:
         self.flushes = 0
         self._writer: Any = None
         self._fh: IO[bytes] | None = None
-        self._node: Any = None
-        self._readers: list[tuple[Any, int, str]] = []  # (DataReader, channel id, topic)
-        self._conds: list[Any] = []
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._tap: Any = None
+        self._channels: list[int] = []  # MCAP channel id per spec index
+        self._dirty = False
         self._lock = threading.RLock()  # re-entered by before_finish hooks that read the counts
         self._closed = False
 
     def start(self) -> None:
-        from cyclonedds.core import (
-            GuardCondition,
-            InstanceState,
-            ReadCondition,
-            SampleState,
-            ViewState,
-            WaitSet,
-        )
-        from cyclonedds.sub import DataReader
-        from cyclonedds.topic import Topic
         from mcap.writer import Writer
 
+        from rbnx.ddstap import RawTap
         from rbnx.rosmsg import ros_name, schema_text
-        from robonix_api.dds import DdsNode, dds_topic_name
-        from robonix_api.dds.qos import resolve_qos
 
         if isinstance(self.output, str | Path):
             self._fh = open(self.output, "wb")  # noqa: SIM115 - kept open until stop()
@@ -104,57 +88,31 @@ class McapRecorder:
         self._writer.start(profile="ros2", library="robonix-nav rbnx record")
         self._writer.flush()  # the header reaches the disk before the first message
         schemas: dict[type, int] = {}
-        self._node = node = DdsNode(domain_id=self.domain_id, name="rbnx_record")
-        self._waitset = WaitSet(node.participant)
-        self._guard = GuardCondition(node.participant)
-        self._waitset.attach(self._guard)
-        mask = SampleState.NotRead | ViewState.Any | InstanceState.Any
         for s in self.specs:
             if s.msg_type not in schemas:
                 schemas[s.msg_type] = self._writer.register_schema(
                     name=ros_name(s.msg_type), encoding="ros2msg", data=schema_text(s.msg_type).encode())
-            channel = self._writer.register_channel(
+            self._channels.append(self._writer.register_channel(
                 topic=s.topic, message_encoding="cdr", schema_id=schemas[s.msg_type],
-                metadata={"offered_qos_profiles": qos_metadata(s.qos)})
-            topic = Topic(node.participant, dds_topic_name(s.topic), s.msg_type)
-            reader = DataReader(node.participant, topic, resolve_qos(s.qos, 1 if s.qos == "latched" else 200))
-            cond = ReadCondition(reader, mask)
-            self._waitset.attach(cond)
-            self._conds.append(cond)
-            self._readers.append((reader, channel, s.topic))
-        self._thread = threading.Thread(target=self._run, name="rbnx-record", daemon=True)
-        self._thread.start()
+                metadata={"offered_qos_profiles": qos_metadata(s.qos)}))
+        self._tap = RawTap(self.specs, self._on_sample, domain_id=self.domain_id, name="rbnx_record",
+                           tick_s=self.flush_s, on_tick=self._flush)
+        self._tap.start()
 
-    def _run(self) -> None:
-        from cyclonedds._clayer import ddspy_take
-        from cyclonedds.core import InstanceState, SampleState, ViewState
-        from cyclonedds.util import duration
+    def _on_sample(self, index: int, data: bytes, recv_ns: int, _writer: int) -> None:
+        with self._lock:
+            self._write(self._channels[index], self.specs[index].topic, recv_ns, data)
+            self._dirty = True
 
-        mask = SampleState.Any | ViewState.Any | InstanceState.Any
-        next_flush = time.monotonic() + self.flush_s
-        dirty = False
-        while not self._stop.is_set():
-            wait_s = max(0.001, min(WAIT_S, next_flush - time.monotonic()))
-            self._waitset.wait(duration(seconds=wait_s))
-            for reader, channel, topic in self._readers:
-                while True:
-                    got = ddspy_take(reader._ref, mask, 64)
-                    if isinstance(got, int) or not got:
-                        break
-                    now = time.time_ns()
-                    with self._lock:
-                        for data, info in got:
-                            if info.valid_data:
-                                self._write(channel, topic, now, data)
-                                dirty = True
-            if time.monotonic() >= next_flush:
-                next_flush = time.monotonic() + self.flush_s
-                if dirty:
-                    with self._lock:
-                        self._writer.flush()
-                        self.flushes += 1
-                    self.flushed()
-                    dirty = False
+    def _flush(self) -> None:
+        """Close the chunk in progress and write it out (a SIGKILL loses at most ``flush_s``)."""
+        if not self._dirty:
+            return
+        with self._lock:
+            self._writer.flush()
+            self.flushes += 1
+            self._dirty = False
+        self.flushed()
 
     def _write(self, channel: int, topic: str, log_ns: int, data: bytes) -> None:
         """One message (caller holds the lock); log times never go backwards within the file."""
@@ -176,18 +134,9 @@ class McapRecorder:
 
     def stop(self) -> None:
         """End the reading thread, close the DDS entities, then finish the file. Idempotent."""
-        self._stop.set()
-        if self._thread is not None:
-            self._guard.set(True)
-            self._thread.join(10.0)
-            self._thread = None
-        node, self._node = self._node, None
-        if node is not None:  # delete our entities now (as DdsNode does for its own), then the participant
-            for ent in [*self._conds, *(r for r, _, _ in self._readers), self._guard, self._waitset]:
-                ent.__del__()
-            self._conds.clear()
-            self._readers.clear()
-            node.close()
+        tap, self._tap = self._tap, None
+        if tap is not None:
+            tap.stop()
         with self._lock:
             if self._closed:
                 return
@@ -228,13 +177,31 @@ def read_truncated(path: str | Path) -> Iterator[tuple[Any, Any, Any]]:
             yield item
 
 
+def spec_from_publication(pub: Any) -> TopicSpec | None:
+    """The TopicSpec a DDS publication (builtin DCPSPublication sample) offers: its ROS 2 topic, our class for
+    its type and its QoS preset; None for a non-ROS topic or a type we have no class for."""
+    from cyclonedds.qos import Policy
+
+    from rbnx.rosmsg import TopicSpec, type_by_name
+
+    name = getattr(pub, "topic_name", "")
+    if not name.startswith("rt/"):
+        return None
+    pkg, _, rest = pub.type_name.partition("::msg::dds_::")
+    cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}") if rest else None
+    if cls is None:
+        return None
+    best_effort = pub.qos[Policy.Reliability] == Policy.Reliability.BestEffort
+    latched = pub.qos[Policy.Durability] == Policy.Durability.TransientLocal
+    return TopicSpec(name[2:], cls, "best_effort" if best_effort else "latched" if latched else "reliable")
+
+
 def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -> list[TopicSpec]:
     """Type and QoS of topics we have no entry for, from DDS discovery (the writers' publication data):
     what `ros2 bag record` does too. TopicError naming the topic when no writer shows up in time."""
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
-    from cyclonedds.qos import Policy
 
-    from rbnx.rosmsg import TopicError, TopicSpec, type_by_name
+    from rbnx.rosmsg import TopicError
     from robonix_api.dds import DdsNode, dds_topic_name
 
     wanted = {dds_topic_name(n): n for n in names}
@@ -247,14 +214,10 @@ def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -
                 name = wanted.get(getattr(pub, "topic_name", ""))
                 if name is None or name in found:
                     continue
-                pkg, _, rest = pub.type_name.partition("::msg::dds_::")
-                cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}")
-                if cls is None:
+                spec = spec_from_publication(pub)
+                if spec is None:
                     raise TopicError(f"topic {name}: its type {pub.type_name} is not one we can record")
-                best_effort = pub.qos[Policy.Reliability] == Policy.Reliability.BestEffort
-                latched = pub.qos[Policy.Durability] == Policy.Durability.TransientLocal
-                found[name] = TopicSpec(name, cls, "best_effort" if best_effort else
-                                        "latched" if latched else "reliable")
+                found[name] = spec
             time.sleep(0.05)
         reader.__del__()
     missing = [n for n in names if n not in found]
