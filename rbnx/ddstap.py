@@ -93,6 +93,8 @@ class RawTap:
             self._conds.append(cond)
             self._readers.append(reader)
             self.specs.append(s)
+        if pending:
+            self.node.announce(*self._readers[-len(pending):])  # on ros_discovery_info, as /<name>
 
     def _run(self) -> None:
         from cyclonedds._clayer import ddspy_take
