@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cyclonedds.idl import IdlStruct, types
+from cyclonedds.idl.annotations import final
 from cyclonedds.pub import DataWriter
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.topic import Topic
@@ -31,8 +32,13 @@ GID_SIZE = 24  # rmw_dds_common (Humble) Gid: char[24]
 NAMESPACE = "/robonix"  # providers' nodes live here
 DISCOVERY_QOS = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)), Policy.Durability.TransientLocal,
                     Policy.History.KeepLast(1))
+#: A reader of the topic: the type has no key, so every participant's sample is the same instance and a
+#: depth-1 reader would keep only the last one received; read deep and keep the latest per participant GID.
+DISCOVERY_READER_QOS = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)), Policy.Durability.TransientLocal,
+                           Policy.History.KeepLast(256))
 
 
+@final
 @dataclass
 class Gid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     """rmw_dds_common/msg/Gid (Humble): an entity's GUID, zero-padded."""
@@ -40,6 +46,7 @@ class Gid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     data: types.array[types.uint8, GID_SIZE] = field(default_factory=lambda: [0] * GID_SIZE)
 
 
+@final
 @dataclass
 class NodeEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::NodeEntitiesInfo_"):
     """rmw_dds_common/msg/NodeEntitiesInfo: one node and the GIDs of its readers and writers."""
@@ -50,6 +57,7 @@ class NodeEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::NodeEntit
     writer_gid_seq: types.sequence[Gid] = field(default_factory=list)
 
 
+@final
 @dataclass
 class ParticipantEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"):
     """rmw_dds_common/msg/ParticipantEntitiesInfo: a participant's GID and its nodes."""

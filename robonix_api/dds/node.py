@@ -319,6 +319,12 @@ class DdsNode:
         self._graph.update([e for e in ents if isinstance(e, DataReader)],
                            [e for e in ents if isinstance(e, DataWriter)])
 
+    def unannounce(self, *raw_entities: Any) -> None:
+        """Drop raw entities given to :meth:`announce` (before deleting them) and re-announce."""
+        with self._lock:
+            self._graph_extra = [e for e in self._graph_extra if all(e is not r for r in raw_entities)]
+        self.announce()
+
     def _forget(self, ent: Publisher[Any] | Subscription[Any]) -> None:
         with self._lock:
             if ent in self._entities:

@@ -21,7 +21,7 @@ from support.procs import wait_until
 
 from robonix_api.dds import DdsNode, LaserScan, Odometry, Twist
 from robonix_api.dds.graph import (
-    DISCOVERY_QOS,
+    DISCOVERY_READER_QOS,
     DISCOVERY_TOPIC,
     ParticipantEntitiesInfo,
     provider_node_name,
@@ -47,7 +47,7 @@ class _GraphWatcher:
         self.store = get_typestore(Stores.ROS2_HUMBLE)
         self.node = node
         self.reader = DataReader(node.participant, Topic(node.participant, DISCOVERY_TOPIC, ParticipantEntitiesInfo),
-                                 DISCOVERY_QOS)
+                                 DISCOVERY_READER_QOS)
         self.latest: dict[bytes, Any] = {}  # participant gid -> decoded sample
 
     def poll(self) -> dict[tuple[str, str], Any]:
