@@ -10,6 +10,7 @@ callback. Readers may be added while running (topics found by discovery); ``tick
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -17,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from rbnx.rosmsg import TopicSpec
+
+log = logging.getLogger(__name__)
 
 WAIT_S = 0.2  # longest wait for data, so stop() and the tick are noticed
 
@@ -97,6 +100,17 @@ class RawTap:
             self.node.announce(*self._readers[-len(pending):])  # on ros_discovery_info, as /<name>
 
     def _run(self) -> None:
+        """The loop, kept alive through a failing consumer callback (logged): a tap must not go silent."""
+        while not self._stop.is_set():
+            try:
+                self._loop()
+            except Exception:
+                if self._stop.is_set():
+                    return
+                log.exception("%s: a sample or tick handler failed; going on", self.name)
+                time.sleep(WAIT_S)
+
+    def _loop(self) -> None:
         from cyclonedds._clayer import ddspy_take
         from cyclonedds.core import InstanceState, SampleState, ViewState
         from cyclonedds.util import duration

@@ -129,6 +129,9 @@ class FoxgloveBridge:
             if index is not None and index in self._latched:
                 self._resend.add(index)
 
+    def on_unsubscribe(self, client: Any, channel: Any) -> None:
+        """Nothing to do: the server stops sending; latched samples stay held for the next subscriber."""
+
     def stop(self) -> None:
         """Stop the DDS side, then the server. Idempotent."""
         tap, self._tap = self._tap, None

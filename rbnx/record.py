@@ -184,8 +184,8 @@ def spec_from_publication(pub: Any) -> TopicSpec | None:
 
     from rbnx.rosmsg import TopicSpec, type_by_name
 
-    name = getattr(pub, "topic_name", "")
-    if not name.startswith("rt/"):
+    name = getattr(pub, "topic_name", None) or ""  # None in the sample of a writer that went away
+    if not name.startswith("rt/") or not getattr(pub, "type_name", None):
         return None
     pkg, _, rest = pub.type_name.partition("::msg::dds_::")
     cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}") if rest else None

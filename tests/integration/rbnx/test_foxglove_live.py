@@ -17,7 +17,7 @@ from support.procs import wait_until
 from websockets.sync.client import ClientConnection, connect
 
 from rbnx.foxglove_live import FoxgloveBridge
-from robonix_api.dds import DdsNode, LaserScan, MapMetaData, OccupancyGrid, TFMessage, Time
+from robonix_api.dds import DdsNode, LaserScan, MapMetaData, OccupancyGrid, Odometry, TFMessage, Time
 from robonix_api.dds.tf import make_transform
 
 pytestmark = pytest.mark.timeout(120)
@@ -106,6 +106,11 @@ def test_late_client_gets_channels_schemas_and_latched_map() -> None:
                 assert list(grid.data) == _map().data
                 tfs = store.deserialize_cdr(c.data[2][0][1], "tf2_msgs/msg/TFMessage")
                 assert tfs.transforms[0].child_frame_id == "laser"
+                # a writer that comes and goes (its disposed discovery sample has no topic name) is harmless
+                gone = node.create_publisher("/transient_odom", Odometry, "reliable")
+                c.wait_for(lambda: "/transient_odom" in c.channels, 30, "the new topic's channel")
+                gone.close()
+                c.pump(1.0)
                 # live topics flow too, with receive times as timestamps
                 c.subscribe(3, "/tf")
                 tf.publish(TFMessage(transforms=[make_transform("odom", "base_link", 1.0, 2.0, 0.0, 6.0)]))
