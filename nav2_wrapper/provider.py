@@ -61,6 +61,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         super().__init__(svc)
         self.svc = svc
         self._plan_topic = ""
+        self._ros_action: Any = None  # the ROS 2 navigate_to_pose action + /goal_pose (ros_action.py)
         self._journal = GoalJournal.from_env(svc.id)
         serve_contracts(svc, NavHandlers(self._loop, lambda: self.not_ready, self._restarting_run).table())
 
@@ -131,6 +132,10 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         loop.apply_speed()
         loop.warm_up()
         loop.start()
+        if self._ros_action is None:  # one per process, on the provider's node; it reads the current session
+            from .ros_action import NavigateToPoseServer
+
+            self._ros_action = NavigateToPoseServer(node, self._loop)
         log.info("initialized: profile %s, map %s, odom %s, scan %s, cmd_vel %s", params.source,
                  *(bindings[r].topic if r in bindings else "-" for r in ("map", "odom", "scan", "cmd_vel")))
         return loop

@@ -15,14 +15,26 @@ from rbnx.commands import register_all
 from rbnx.models import ManifestProblems
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The whole `rbnx` parser: global options, then each command's own (see :mod:`rbnx.commands`)."""
+def _command_of(argv: list[str]) -> str | None:
+    """The command word of ``argv`` (skipping the global ``--atlas VALUE``), None if there is none."""
+    it = iter(argv)
+    for a in it:
+        if a == "--atlas":
+            next(it, None)
+        elif not a.startswith("-"):
+            return a
+    return None
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The `rbnx` parser: global options, then each command's own (see :mod:`rbnx.commands`); given
+    ``argv``, only the command it names is loaded when that is unambiguous."""
     p = argparse.ArgumentParser(prog="rbnx", description="robonix-nav package tool: build, boot, inspect.")
     p.add_argument("--atlas", default=default_atlas(),
                    help="atlas address HOST:PORT (default $ROBONIX_ATLAS or 127.0.0.1:50051)")
     sub = p.add_subparsers(dest="cmd", metavar="COMMAND")
     sub.required = True
-    register_all(sub)
+    register_all(sub, None if argv is None else _command_of(argv))
     return p
 
 
@@ -57,7 +69,8 @@ def _adopt_token(args: argparse.Namespace) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv).parse_args(argv)
     try:
         _adopt_token(args)
         return args.run(args)

@@ -3,14 +3,22 @@
 Each channel carries ROS 2 CDR (XCDR1 little-endian with its 4-byte encapsulation header, the bytes
 rmw_cyclonedds puts on the wire) and a ``ros2msg`` schema generated from the same IDL struct, so a reader
 needs no ROS install and no knowledge of this project. Log and publish times are the receive time (wall
-clock, ns), as rosbag2 records them; the messages keep their own header stamps (sim time under
-``use_sim_time``), and /clock is recorded as a topic, which is what replay uses as its time base.
+clock, ns, taken per message as it is read off the reader, as rosbag2 stamps each callback); the messages keep
+their own header stamps (sim time under ``use_sim_time``), and /clock is recorded as a topic, which is what
+replay uses as its time base.
+
+The file survives a crash: the chunk in progress is closed and written out every ``flush_s`` (0.5 s), so a
+SIGKILL loses at most that much. Such a file has no summary or footer; mcap's ``NonSeekingReader``
+(``rbnx.record.read_truncated``) and ``rbnx replay`` read it up to the last whole record. ``--format rosbag2``
+(:mod:`rbnx.rosbag2_out`) writes the same file inside a rosbag2 folder with its ``metadata.yaml``.
 """
 
 from __future__ import annotations
 
+import struct
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -28,7 +36,7 @@ _QOS_YAML = ("- history: 1\n  depth: {depth}\n  reliability: {rel}\n  durability
              "  liveliness_lease_duration:\n    sec: 9223372036\n    nsec: 854775807\n"
              "  avoid_ros_namespace_conventions: false\n")
 
-BATCH_S = 0.1  # seconds between passes over the readers (see McapRecorder._run)
+FLUSH_S = 0.5  # seconds between chunk flushes: what a SIGKILL may lose at most
 
 
 def qos_metadata(qos: str) -> str:
@@ -40,45 +48,36 @@ def qos_metadata(qos: str) -> str:
 class McapRecorder:
     """Subscribes to ``specs`` on a DDS domain and appends every sample to an MCAP file.
 
-    Samples are taken as the serialized bytes Cyclone received (``ddspy_take``, the call under
-    cyclonedds' ``DataReader.take``, pinned with cyclonedds) and written as they are: no decode and
-    re-encode, so the file holds the wire bytes and recording stays cheap. One thread waits on all
-    readers and writes, so writes never interleave; ``stop`` ends it before finishing the file.
+    The samples come from a :class:`rbnx.ddstap.RawTap`: the wire bytes as received, each stamped with its
+    receive time, written as they are. The tap's one thread writes, so writes never interleave; every
+    ``flush_s`` it closes the chunk in progress and flushes it to the file. ``stop`` ends the thread before
+    finishing the file.
     """
 
     def __init__(self, output: str | Path | IO[bytes], specs: list[TopicSpec] | tuple[TopicSpec, ...],
-                 domain_id: int | None = None) -> None:
+                 domain_id: int | None = None, flush_s: float = FLUSH_S) -> None:
         self.output = output
         self.specs = list(specs)
         self.domain_id = domain_id
+        self.flush_s = flush_s
         self.counts: dict[str, int] = {s.topic: 0 for s in self.specs}
         self.bytes = 0
+        self.first_ns: int | None = None  # log time of the first and last message written
+        self.last_ns: int | None = None
+        self.flushes = 0
         self._writer: Any = None
         self._fh: IO[bytes] | None = None
-        self._node: Any = None
-        self._readers: list[tuple[Any, int, str]] = []  # (DataReader, channel id, topic)
-        self._conds: list[Any] = []
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
+        self._tap: Any = None
+        self._channels: list[int] = []  # MCAP channel id per spec index
+        self._dirty = False
+        self._lock = threading.RLock()  # re-entered by before_finish hooks that read the counts
         self._closed = False
 
     def start(self) -> None:
-        from cyclonedds.core import (
-            GuardCondition,
-            InstanceState,
-            ReadCondition,
-            SampleState,
-            ViewState,
-            WaitSet,
-        )
-        from cyclonedds.sub import DataReader
-        from cyclonedds.topic import Topic
         from mcap.writer import Writer
 
+        from rbnx.ddstap import RawTap
         from rbnx.rosmsg import ros_name, schema_text
-        from robonix_api.dds import DdsNode, dds_topic_name
-        from robonix_api.dds.qos import resolve_qos
 
         if isinstance(self.output, str | Path):
             self._fh = open(self.output, "wb")  # noqa: SIM115 - kept open until stop()
@@ -87,76 +86,71 @@ class McapRecorder:
             out = self.output
         self._writer = Writer(out)
         self._writer.start(profile="ros2", library="robonix-nav rbnx record")
+        self._writer.flush()  # the header reaches the disk before the first message
         schemas: dict[type, int] = {}
-        self._node = node = DdsNode(domain_id=self.domain_id, name="rbnx_record")
-        self._waitset = WaitSet(node.participant)
-        self._guard = GuardCondition(node.participant)
-        self._waitset.attach(self._guard)
-        mask = SampleState.NotRead | ViewState.Any | InstanceState.Any
         for s in self.specs:
             if s.msg_type not in schemas:
                 schemas[s.msg_type] = self._writer.register_schema(
                     name=ros_name(s.msg_type), encoding="ros2msg", data=schema_text(s.msg_type).encode())
-            channel = self._writer.register_channel(
+            self._channels.append(self._writer.register_channel(
                 topic=s.topic, message_encoding="cdr", schema_id=schemas[s.msg_type],
-                metadata={"offered_qos_profiles": qos_metadata(s.qos)})
-            topic = Topic(node.participant, dds_topic_name(s.topic), s.msg_type)
-            reader = DataReader(node.participant, topic, resolve_qos(s.qos, 1 if s.qos == "latched" else 200))
-            cond = ReadCondition(reader, mask)
-            self._waitset.attach(cond)
-            self._conds.append(cond)
-            self._readers.append((reader, channel, s.topic))
-        self._thread = threading.Thread(target=self._run, name="rbnx-record", daemon=True)
-        self._thread.start()
+                metadata={"offered_qos_profiles": qos_metadata(s.qos)}))
+        self._tap = RawTap(self.specs, self._on_sample, domain_id=self.domain_id, name="rbnx_record",
+                           tick_s=self.flush_s, on_tick=self._flush)
+        self._tap.start()
 
-    def _run(self) -> None:
-        from cyclonedds._clayer import ddspy_take
-        from cyclonedds.core import InstanceState, SampleState, ViewState
-        from cyclonedds.util import duration
+    def _on_sample(self, index: int, data: bytes, recv_ns: int, _writer: int) -> None:
+        with self._lock:
+            self._write(self._channels[index], self.specs[index].topic, recv_ns, data)
+            self._dirty = True
 
-        mask = SampleState.Any | ViewState.Any | InstanceState.Any
-        while not self._stop.is_set():
-            self._waitset.wait(duration(milliseconds=200))
-            # Batch: one pass over the readers per BATCH_S instead of one wake-up per sample (a 300 Hz
-            # /clock alone would wake us 300 times a second); reader depth 200 covers the wait.
-            self._stop.wait(BATCH_S)
-            for reader, channel, topic in self._readers:
-                while True:
-                    got = ddspy_take(reader._ref, mask, 64)
-                    if isinstance(got, int) or not got:
-                        break
-                    now = time.time_ns()
-                    with self._lock:
-                        for data, info in got:
-                            if not info.valid_data:
-                                continue
-                            self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
-                                                     data=data, sequence=self.counts[topic])
-                            self.counts[topic] += 1
-                            self.bytes += len(data)
+    def _flush(self) -> None:
+        """Close the chunk in progress and write it out (a SIGKILL loses at most ``flush_s``)."""
+        if not self._dirty:
+            return
+        with self._lock:
+            self._writer.flush()
+            self.flushes += 1
+            self._dirty = False
+        self.flushed()
+
+    def _write(self, channel: int, topic: str, log_ns: int, data: bytes) -> None:
+        """One message (caller holds the lock); log times never go backwards within the file."""
+        if self.last_ns is not None and log_ns < self.last_ns:
+            log_ns = self.last_ns
+        self._writer.add_message(channel_id=channel, log_time=log_ns, publish_time=log_ns, data=data,
+                                 sequence=self.counts[topic])
+        self.counts[topic] += 1
+        self.bytes += len(data)
+        if self.first_ns is None:
+            self.first_ns = log_ns
+        self.last_ns = log_ns
+
+    def flushed(self) -> None:
+        """Called after each periodic flush (outside the lock); the rosbag2 layout rewrites its metadata."""
+
+    def before_finish(self, writer: Any) -> None:
+        """Called with the writer just before its summary is written (the rosbag2 layout adds a record)."""
 
     def stop(self) -> None:
         """End the reading thread, close the DDS entities, then finish the file. Idempotent."""
-        self._stop.set()
-        if self._thread is not None:
-            self._guard.set(True)
-            self._thread.join(10.0)
-            self._thread = None
-        node, self._node = self._node, None
-        if node is not None:  # delete our entities now (as DdsNode does for its own), then the participant
-            for ent in [*self._conds, *(r for r, _, _ in self._readers), self._guard, self._waitset]:
-                ent.__del__()
-            self._conds.clear()
-            self._readers.clear()
-            node.close()
+        tap, self._tap = self._tap, None
+        if tap is not None:
+            tap.stop()
         with self._lock:
             if self._closed:
                 return
             self._closed = True
             if self._writer is not None:
+                self.before_finish(self._writer)
                 self._writer.finish()
             if self._fh is not None:
                 self._fh.close()
+
+    def duration_s(self) -> float:
+        """Seconds between the first and the last message's log time (0 before two messages)."""
+        with self._lock:
+            return 0.0 if self.first_ns is None or self.last_ns is None else (self.last_ns - self.first_ns) / 1e9
 
     def summary(self) -> str:
         with self._lock:
@@ -164,13 +158,50 @@ class McapRecorder:
             return f"{sum(self.counts.values())} messages ({self.bytes / 1e6:.1f} MB): {parts}"
 
 
+def read_truncated(path: str | Path) -> Iterator[tuple[Any, Any, Any]]:
+    """(schema, channel, message) of every whole message in an MCAP file, in file order, also when the
+    file was cut short (a recorder killed before it wrote the summary): reading stops at the first
+    incomplete record instead of raising."""
+    from mcap.exceptions import McapError
+    from mcap.reader import NonSeekingReader
+
+    with open(path, "rb") as f:
+        it = NonSeekingReader(f).iter_messages(log_time_order=False)
+        while True:
+            try:
+                item = next(it)
+            except StopIteration:
+                return
+            except (McapError, EOFError, ValueError, struct.error):
+                return
+            yield item
+
+
+def spec_from_publication(pub: Any) -> TopicSpec | None:
+    """The TopicSpec a DDS publication (builtin DCPSPublication sample) offers: its ROS 2 topic, our class for
+    its type and its QoS preset; None for a non-ROS topic or a type we have no class for."""
+    from cyclonedds.qos import Policy
+
+    from rbnx.rosmsg import TopicSpec, type_by_name
+
+    name = getattr(pub, "topic_name", None) or ""  # None in the sample of a writer that went away
+    if not name.startswith("rt/") or not getattr(pub, "type_name", None):
+        return None
+    pkg, _, rest = pub.type_name.partition("::msg::dds_::")
+    cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}") if rest else None
+    if cls is None:
+        return None
+    best_effort = pub.qos[Policy.Reliability] == Policy.Reliability.BestEffort
+    latched = pub.qos[Policy.Durability] == Policy.Durability.TransientLocal
+    return TopicSpec(name[2:], cls, "best_effort" if best_effort else "latched" if latched else "reliable")
+
+
 def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -> list[TopicSpec]:
     """Type and QoS of topics we have no entry for, from DDS discovery (the writers' publication data):
     what `ros2 bag record` does too. TopicError naming the topic when no writer shows up in time."""
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
-    from cyclonedds.qos import Policy
 
-    from rbnx.rosmsg import TopicError, TopicSpec, type_by_name
+    from rbnx.rosmsg import TopicError
     from robonix_api.dds import DdsNode, dds_topic_name
 
     wanted = {dds_topic_name(n): n for n in names}
@@ -183,14 +214,10 @@ def discover_topics(names: list[str], domain_id: int | None, timeout_s: float) -
                 name = wanted.get(getattr(pub, "topic_name", ""))
                 if name is None or name in found:
                     continue
-                pkg, _, rest = pub.type_name.partition("::msg::dds_::")
-                cls = type_by_name(f"{pkg}/msg/{rest.rstrip('_')}")
-                if cls is None:
+                spec = spec_from_publication(pub)
+                if spec is None:
                     raise TopicError(f"topic {name}: its type {pub.type_name} is not one we can record")
-                best_effort = pub.qos[Policy.Reliability] == Policy.Reliability.BestEffort
-                latched = pub.qos[Policy.Durability] == Policy.Durability.TransientLocal
-                found[name] = TopicSpec(name, cls, "best_effort" if best_effort else
-                                        "latched" if latched else "reliable")
+                found[name] = spec
             time.sleep(0.05)
         reader.__del__()
     missing = [n for n in names if n not in found]

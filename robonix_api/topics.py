@@ -32,12 +32,13 @@ class TopicsMixin:
         self._subscriptions: list[Any] = []
 
     def dds_node(self) -> Any:
-        """This provider's one ``DdsNode`` (created on first use)."""
+        """This provider's one ``DdsNode`` (created on first use), the ROS node ``/robonix/<id>``."""
         with self._dds_lock:
             if self._dds_node is None:
                 from robonix_api.dds import DdsNode
+                from robonix_api.dds.graph import provider_node_name
 
-                self._dds_node = DdsNode()
+                self._dds_node = DdsNode(name=provider_node_name(str(getattr(self, "id", "") or "provider")))
             return self._dds_node
 
     def create_publisher(self, contract_id: str, *, topic: str, msg_type: type | str,

@@ -31,12 +31,28 @@ def register(sub: Any) -> None:
         b.add_argument("--no-gateway", action="store_true", help="do not serve the deployment's MCP gateway")
         b.add_argument("--dashboard", type=int, nargs="?", const=8765, metavar="PORT",
                        help="also serve the live dashboard on 127.0.0.1:PORT (default 8765)")
+        b.add_argument("--foxglove", type=int, nargs="?", const=8766, metavar="PORT",
+                       help="also serve every DDS topic to Foxglove on ws://127.0.0.1:PORT (default 8766)")
         b.add_argument("--serial", action="store_true",
                        help="start entries one at a time instead of all at once")
         b.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    """:func:`_run`, with the live Foxglove bridge (``--foxglove``) serving around it."""
+    from rbnx.foxglove_live import start_for_cli
+
+    bridge, rc = start_for_cli(getattr(args, "foxglove", None), "rbnx boot")
+    if rc:
+        return rc
+    try:
+        return _run(args)
+    finally:
+        if bridge is not None:
+            bridge.stop()
+
+
+def _run(args: argparse.Namespace) -> int:
     """Validate the deploy file (exit 2, nothing started), refuse a second boot of it (exit 1), then boot and serve."""
     from rbnx.models import load_deploy
 

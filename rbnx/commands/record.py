@@ -14,9 +14,13 @@ from rbnx.record import DEFAULT_TOPIC_NAMES, McapRecorder, discover_topics
 
 
 def register(sub: Any) -> None:
-    """``record -o FILE.mcap [TOPIC ...]``."""
+    """``record -o FILE.mcap [TOPIC ...]`` or ``record --format rosbag2 -o FOLDER [TOPIC ...]``."""
     r = sub.add_parser("record", help="record DDS topics to an MCAP file (ROS 2 CDR + ros2msg schemas)")
-    r.add_argument("-o", "--output", required=True, help="the .mcap file to write")
+    r.add_argument("-o", "--output", required=True,
+                   help="the .mcap file to write (--format rosbag2: the bag folder to create)")
+    r.add_argument("--format", choices=("mcap", "rosbag2"), default="mcap",
+                   help="mcap: one .mcap file (default); rosbag2: a folder with metadata.yaml and the .mcap, "
+                   "as `ros2 bag record -s mcap` writes it")
     r.add_argument("topics", nargs="*", metavar="TOPIC",
                    help=f"topics (default: {DEFAULT_TOPIC_NAMES}); the type of other topics is learnt from "
                    "their writers, or give it as /name:pkg/Type[:qos]")
@@ -49,15 +53,23 @@ def run(args: argparse.Namespace) -> int:
         print(f"rbnx record: --duration: must be > 0, got {args.duration}", file=sys.stderr)
         return 2
     out = Path(args.output)
-    if out.suffix != ".mcap":
+    if args.format == "mcap" and out.suffix != ".mcap":
         print(f"rbnx record: --output {out}: must end in .mcap", file=sys.stderr)
+        return 2
+    if args.format == "rosbag2" and out.exists():
+        print(f"rbnx record: --output {out}: exists already; give a new bag folder name", file=sys.stderr)
         return 2
     if not out.parent.is_dir():
         print(f"rbnx record: --output {out}: directory {out.parent} does not exist", file=sys.stderr)
         return 2
     stop = threading.Event()
     old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
-    rec = McapRecorder(out, specs, args.domain_id)
+    if args.format == "rosbag2":
+        from rbnx.rosbag2_out import Rosbag2Recorder
+
+        rec: McapRecorder = Rosbag2Recorder(out, specs, args.domain_id)
+    else:
+        rec = McapRecorder(out, specs, args.domain_id)
     try:
         rec.start()
         print(f"recording {', '.join(s.topic for s in specs)} to {out} (Ctrl-C stops)", flush=True)

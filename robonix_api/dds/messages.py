@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.annotations import final
-from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint32, uint64
+from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint8, uint32, uint64
 
 from robonix_api.dds import _fastpath
 
@@ -261,6 +261,35 @@ class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
     intensities: sequence[float32] = field(default_factory=_f32)
 
 
+def _u8() -> np.ndarray:
+    return np.zeros(0, dtype=np.uint8)
+
+
+@final
+@dataclass
+class PointField(IdlStruct, typename="sensor_msgs::msg::dds_::PointField_"):
+    """sensor_msgs/PointField: one field of a PointCloud2 point (datatype 7 = FLOAT32)."""
+    name: str = ""
+    offset: uint32 = 0
+    datatype: uint8 = 0
+    count: uint32 = 0
+
+
+@final
+@dataclass
+class PointCloud2(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    """sensor_msgs/PointCloud2: packed points (robonix/primitive/lidar/lidar3d)."""
+    header: Header = field(default_factory=Header)
+    height: uint32 = 0
+    width: uint32 = 0
+    fields: sequence[PointField] = field(default_factory=list)
+    is_bigendian: bool = False
+    point_step: uint32 = 0
+    row_step: uint32 = 0
+    data: sequence[uint8] = field(default_factory=_u8)
+    is_dense: bool = False
+
+
 # --- tf2_msgs / rosgraph_msgs ---------------------------------------------------------------------
 @final
 @dataclass
@@ -291,7 +320,7 @@ ALL_TYPES = (
     Time, Duration, Header, Point, Point32, Vector3, Quaternion, Pose, Pose2D, PoseStamped,
     PoseWithCovariance, PoseWithCovarianceStamped, Twist, TwistStamped, TwistWithCovariance, Transform,
     TransformStamped, Polygon, PolygonStamped, Odometry, MapMetaData, OccupancyGrid, Path, LaserScan,
-    TFMessage, Clock, MapLifecycle,
+    TFMessage, Clock, MapLifecycle, PointField, PointCloud2,
 )
 
 for _t in ALL_TYPES:

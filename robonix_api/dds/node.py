@@ -39,6 +39,7 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from robonix_api.dds.config import DdsConfigError, resolve_config, resolve_domain_id, summarize
+from robonix_api.dds.graph import PARTICIPANT_USER_DATA, GraphPresence
 from robonix_api.dds.qos import describe, resolve_qos, writer_qos
 from robonix_api.dds.validate import validate_message
 from robonix_api.dds.writer_trust import participant_qos
@@ -245,9 +246,9 @@ class DdsNode:
         self.name = name
         self.domain_id = resolve_domain_id(domain_id)
         self.config_uri, self.config = _acquire_domain(self.domain_id)
-        try:
-            # USER_DATA carries the deployment's tag when a token is set (robonix_api.dds.writer_trust)
-            self.participant = DomainParticipant(self.domain_id, qos=participant_qos())
+        try:  # USER_DATA as rmw sets it, plus the deployment's tag (writer_trust); a named node also
+            # announces itself on ros_discovery_info (graph.py)
+            self.participant = DomainParticipant(self.domain_id, qos=participant_qos(PARTICIPANT_USER_DATA))
         except DDSException as exc:
             _release_domain(self.domain_id)
             raise DdsConfigError(f"cannot create a DDS participant on domain {self.domain_id}: {exc}") from exc
@@ -259,6 +260,9 @@ class DdsNode:
         self._guard: GuardCondition | None = None
         self._thread: threading.Thread | None = None
         self._closed = False
+        self._graph_extra: list[Any] = []  # raw readers/writers made on our participant (announce())
+        self._graph = GraphPresence(self.participant, name) if name else None
+        self.announce()
 
     # --- entities ---------------------------------------------------------------------------------
     def _topic(self, topic: str, msg_type: type) -> Topic:
@@ -285,6 +289,7 @@ class DdsNode:
         pub = Publisher(self, topic, msg_type, resolve_qos(qos, depth))
         with self._lock:
             self._entities.append(pub)
+        self.announce()
         return pub
 
     def create_subscription(self, topic: str, msg_type: type[M], callback: Callable[[M], Any],
@@ -300,12 +305,33 @@ class DdsNode:
                 self._entities.append(sub)
             self._waitset.attach(sub._cond)
         self._guard.set(True)  # let the thread pick up samples that arrived before attach
+        self.announce()
         return sub
+
+    def announce(self, *raw_entities: Any) -> None:
+        """Publish this node's readers and writers on ros_discovery_info (a named node only), adding
+        ``raw_entities``: DataReaders/DataWriters made directly on :attr:`participant`."""
+        if self._graph is None or self._closed:
+            return
+        with self._lock:
+            self._graph_extra.extend(raw_entities)
+            ents = [e._reader for e in self._entities if isinstance(e, Subscription) and e._reader is not None]
+            ents += [e._writer for e in self._entities if isinstance(e, Publisher) and e._writer is not None]
+            ents += self._graph_extra
+        self._graph.update([e for e in ents if isinstance(e, DataReader)],
+                           [e for e in ents if isinstance(e, DataWriter)])
+
+    def unannounce(self, *raw_entities: Any) -> None:
+        """Drop raw entities given to :meth:`announce` (before deleting them) and re-announce."""
+        with self._lock:
+            self._graph_extra = [e for e in self._graph_extra if all(e is not r for r in raw_entities)]
+        self.announce()
 
     def _forget(self, ent: Publisher[Any] | Subscription[Any]) -> None:
         with self._lock:
             if ent in self._entities:
                 self._entities.remove(ent)
+        self.announce()
         if isinstance(ent, Subscription) and self._waitset is not None and ent._cond is not None:
             with contextlib.suppress(DDSException):
                 self._waitset.detach(ent._cond)
@@ -391,6 +417,8 @@ class DdsNode:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5.0)
         with self._dispatch_lock:
+            if self._graph is not None:
+                self._graph.close()
             for ent in list(self._entities):
                 ent.close()
             self._topics.clear()

@@ -7,7 +7,8 @@ discovery (builtin topic DCPSParticipant), every writer its participant (DCPSPub
 received sample names its writer (``sample_info.publication_handle``).
 
 A participant of a provider started with the deployment token (``ROBONIX_DEPLOY_TOKEN``) carries
-``rbnx-deploy:<tag>`` in its USER_DATA, the tag a one-way hash of the token: it names the deployment
+``rbnx_deploy=<tag>;`` in its USER_DATA (beside rmw's ``enclave=/;``, key=value pairs as rmw
+writes them), the tag a one-way hash of the token: it names the deployment
 without revealing the token. A reader that trusts only the deployment checks each sample's writer: its
 participant must carry the same tag. This stops other local users and foreign robots on the domain that
 do not know the token; it is not cryptographic authentication (a hostile process that reads the tag off
@@ -28,20 +29,25 @@ from cyclonedds.qos import Policy, Qos
 from robonix_api import auth
 
 log = logging.getLogger("robonix_api.dds.writer_trust")
-TAG_PREFIX = b"rbnx-deploy:"
+TAG_PREFIX = b"rbnx_deploy="
 REFRESH_MIN_S = 0.05  # wall s between discovery re-reads for an unknown writer (a flood costs little)
 
 
 def deployment_tag(token: str) -> bytes:
-    """USER_DATA of the deployment's participants: ``rbnx-deploy:`` + 32 hex chars of SHA-256 over the token."""
+    """The deployment's USER_DATA entry: ``rbnx_deploy=`` + 32 hex chars of SHA-256 over the token."""
     digest = hashlib.sha256(b"robonix-dds-writer\0" + token.encode()).hexdigest()[:32]
     return TAG_PREFIX + digest.encode()
 
 
-def participant_qos() -> Qos | None:
-    """The QoS a provider's participant is created with: the deployment tag when a token is set, else None."""
+def participant_user_data(base: bytes) -> bytes:
+    """``base`` (rmw's ``enclave=/;``) plus the deployment's tag entry when this process holds a token."""
     token = auth.current_token()
-    return Qos(Policy.Userdata(deployment_tag(token))) if token else None
+    return base + deployment_tag(token) + b";" if token else base
+
+
+def participant_qos(base: bytes) -> Qos:
+    """The QoS a provider's participant is created with: USER_DATA from :func:`participant_user_data`."""
+    return Qos(Policy.Userdata(participant_user_data(base)))
 
 
 class WriterTrust:
@@ -86,6 +92,6 @@ class WriterTrust:
             part = self._writer_part.get(h)
             if part is None or part not in self._part_tag:
                 return False  # discovery has not told us yet: decide on a later sample
-            ok = self._part_tag[part] == self.tag
+            ok = self.tag in self._part_tag[part].split(b";")
             self._verdict[h] = ok
             return ok
