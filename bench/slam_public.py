@@ -19,7 +19,9 @@ Develop on slices: ``--max-scans 2000``; the full logs take minutes each (run th
 from __future__ import annotations
 
 import argparse
+import collections
 import json
+import logging
 import math
 import platform
 import sys
@@ -47,9 +49,26 @@ REVISIT_PATH_M = 10.0  # a revisit: within 0.5 m and 0.5 rad of a node at least 
 REVISIT_SAMPLES = 300  # revisit pairs checked per log (evenly spread), bounds the check's cost
 
 
+class _RejectReasons(logging.Handler):
+    """Counts the engine's "loop closure rejected: <why>" debug lines (why candidates fail, per log)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.DEBUG)
+        self.counts: collections.Counter[str] = collections.Counter()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        msg = record.getMessage()
+        if "loop closure rejected: " in msg:
+            self.counts[msg.split("loop closure rejected: ", 1)[1]] += 1
+
+
 def run_log(name: str, data: Path, max_scans: int | None, config: SlamConfig) -> tuple[dict, SlamEngine]:
     recs = read_carmen(data / f"{name}.clf.bz2", max_scans=max_scans)
     eng = SlamEngine(config)
+    reasons = _RejectReasons()
+    engine_log = logging.getLogger("slam_service.core.engine")
+    engine_log.addHandler(reasons)
+    engine_log.setLevel(logging.DEBUG)
     cpu = np.empty(len(recs))
     w0 = time.perf_counter()
     for i, r in enumerate(recs):
@@ -60,6 +79,7 @@ def run_log(name: str, data: Path, max_scans: int | None, config: SlamConfig) ->
     eng.flush()
     flush_cpu = time.thread_time() - t0
     wall = time.perf_counter() - w0
+    engine_log.removeHandler(reasons)
     t0 = time.thread_time()
     eng.optimize()
     final_opt = time.thread_time() - t0
@@ -78,7 +98,7 @@ def run_log(name: str, data: Path, max_scans: int | None, config: SlamConfig) ->
         "loop_closures": s.loop_closures, "loop_rejected": s.loop_rejected, "odom_jumps": s.odom_jumps,
         "wide_searches": s.wide_searches, "scans_reordered": s.scans_reordered,
         "scans_skipped_time": s.scans_skipped_time, "match_failures": s.match_failures,
-        "nodes_pruned": s.nodes_pruned,
+        "nodes_pruned": s.nodes_pruned, "loop_reject_reasons": dict(reasons.counts),
     }
     rel = data / f"{name}.relations"
     if rel.exists():
