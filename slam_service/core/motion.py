@@ -24,6 +24,7 @@ class StepWindows:
     wide: bool
 
 
+DEFAULT_PERIOD_S = 0.1  # s, scan period assumed before a stream's own is known
 GAP_PERIODS = 5.0  # a data gap counts only when it is this many of the stream's own mean scan periods
 
 
@@ -54,8 +55,8 @@ def step_times(c: SlamConfig, gap: float, period: float | None) -> tuple[float, 
     """(dt for the odometry-rate test, data gap for window widening) of a scan ``gap`` s after the previous
     one in a stream whose mean period is ``period``: the rate is judged over at least one mean period
     (burst stamps), and a gap counts only past ``GAP_PERIODS`` mean periods (and ``wide_step_gap_s``)."""
-    if period is None:
-        return gap, gap
+    if period is None:  # the first scans of a stream: assume the common 10 Hz until the clock knows better
+        return max(gap, DEFAULT_PERIOD_S), gap
     return max(gap, period), (gap if gap > GAP_PERIODS * period else 0.0)
 
 
