@@ -17,7 +17,7 @@ from typing import Any
 COMMANDS: tuple[str, ...] = (
     "boot", "shutdown", "build", "start", "validate", "caps", "contracts", "describe", "tools", "channels",
     "inspect", "logs", "map_card", "lifecycle", "token", "demo", "navigate", "nav_status", "cancel", "record",
-    "replay", "dashboard", "init",
+    "replay", "convert_carmen", "dashboard", "init",
 )
 
 

@@ -22,15 +22,18 @@ from robonix_common.geometry import PoseArray, compose, inverse, relative, trans
 from robonix_common.grid import GridMap
 from robonix_common.scan import Scan
 
+from .background import OptimizeJob, merged_poses, remove_edge, snapshot
 from .lifelong import covered
 from .lookup import LookupGrid
 from .matcher import MatchResult, inlier_fraction, match_scan, refine_pose, required_margin
 from .motion import (
+    ScanClock,
     StepWindows,
     legacy_jump,
     loop_radius,
     loop_windows,
     search_windows,
+    step_times,
     suspect_step,
     unmatched_sigmas,
 )
@@ -66,6 +69,7 @@ class SlamEngine:
     def reset(self) -> None:
         """Forget the map and trajectory (a loaded localization map is kept)."""
         c = self.config
+        self._job: OptimizeJob | None = None  # a running background solve belongs to the old graph: dropped
         self.graph = PoseGraph()
         self._odom: list[PoseArray] = []
         self._stamps: list[float] = []
@@ -84,6 +88,7 @@ class SlamEngine:
         self._pose = np.zeros(3)
         self._last_odom: PoseArray | None = None
         self._last_stamp: float | None = None
+        self._clock = ScanClock()  # the stream's mean scan period (bursty stamps are judged against it)
         self._initial_pose: PoseArray | None = None
         self._last_match_pose: PoseArray | None = None  # localization gating reference
         self._running: LookupGrid | None = None  # running-submap lookup, reused for a few nodes
@@ -185,6 +190,7 @@ class SlamEngine:
     def session(self) -> SessionData:
         """A snapshot: the graph is copied too, so a save written after the caller's lock is released stays
         consistent while later scans add nodes (they did: 'could not broadcast (72,) into (73,)')."""
+        self._settle()
         g = self.graph
         graph = dataclasses.replace(g, poses=g.poses.copy(), edge_ij=list(g.edge_ij), edge_z=list(g.edge_z),
                                     edge_info=list(g.edge_info), edge_kind=list(g.edge_kind))
@@ -257,6 +263,7 @@ class SlamEngine:
         the reorder buffer still holds, then re-draw every node still waiting for its share of the re-render
         budget, so ``map()`` matches ``trajectory()``."""
         upd = self._run(self._reorder.flush())
+        self._settle()
         self._render_pending(len(self._pending))
         return upd
 
@@ -278,8 +285,10 @@ class SlamEngine:
         self.stats.beams_no_return += prep.n_no_return
         if len(prep.points) < c.min_valid_beams:
             return self._skip(f"only {len(prep.points)} usable beams of {scan.ranges.size}", "scans_skipped_invalid")
-        gap = t - self._last_stamp if self._last_stamp is not None else 0.0
+        raw_gap = t - self._last_stamp if self._last_stamp is not None else 0.0
         self._last_stamp = t
+        rate_dt, gap = step_times(c, raw_gap, self._clock.period())
+        self._clock.tick(t)
         self._glitch_seed = None
         if self._initial_pose is not None:  # (re)start: anchor map->odom so the robot is at the given pose
             self._map_to_odom = compose(self._initial_pose, inverse(odom))
@@ -292,7 +301,7 @@ class SlamEngine:
                 self._map_to_odom = compose(self._pose, inverse(odom))
                 self._last_odom = odom
                 return self._skip(f"odometry jump of {dist:.2f} m / {d[2]:.2f} rad", "odom_jumps")
-            if not c.drop_odom_jumps and suspect_step(c, dist, d[2], gap):
+            if not c.drop_odom_jumps and suspect_step(c, dist, d[2], rate_dt):
                 self.stats.odom_jumps += 1
                 self._glitch_seed = compose(self._map_to_odom, self._last_odom)  # where the robot was
         self._last_odom = odom
@@ -385,6 +394,7 @@ class SlamEngine:
             self._drift_theta += math.sqrt(cov[2, 2]) if cov is not None else c.odom_sigma_theta
         else:
             self._drift += c.loop_drift_per_m * dist
+            self._drift_theta += c.loop_drift_theta_per_m * dist
         self._path.append((self._path[prev] if n else 0.0) + dist)
         self._odom.append(odom)
         self._stamps.append(t)
@@ -399,10 +409,13 @@ class SlamEngine:
         self._pose = pose.copy()
         self._map_to_odom = compose(pose, inverse(odom))
         loop = False
-        if c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
+        if self._job is not None:
+            if k + 1 - self._job.n_nodes >= c.optimize_apply_nodes:
+                loop = self._apply_job()
+        elif c.loop_closure and k - self._last_loop_node >= c.loop_cooldown_nodes:
             loop = self._try_loop_closure(k)
-            if loop:
-                self._drift = self._drift_theta = 0.0
+        if loop:
+            self._drift = self._drift_theta = 0.0
         if not loop:  # a closing call already did the optimisation: its share of re-rendering starts next call
             self._render_pending()
         self._prune(k)
@@ -416,7 +429,7 @@ class SlamEngine:
         :mod:`.lifelong`): sequential matching and loop closure still see every node they use, and a
         pass through mapped rooms leaves no nodes behind. At most ``PRUNE_PER_CALL`` checks per call."""
         c = self.config
-        if not c.prune_nodes:
+        if not c.prune_nodes or self._job is not None:  # a background solve holds node numbers: no renumbering
             return
         path = np.asarray(self._path)
         recent = np.flatnonzero(path[k] - path < c.loop_min_chain_distance)
@@ -580,6 +593,12 @@ class SlamEngine:
             return False
         pose, cov = found
         self.graph.add_edge(cand, k, relative(poses[cand], pose), _info_in_frame(cov, poses[cand][2]), EDGE_LOOP)
+        if c.optimize_in_background:  # solved off the scan path, applied optimize_apply_nodes nodes later
+            self._job = OptimizeJob(snapshot(self.graph), k, self.graph.n_edges - 1, c.optimizer_iterations,
+                                    c.loop_huber or None, c.loop_max_chi2)
+            self._job.start()
+            self._last_loop_node = k
+            return False
         saved = self.graph.poses.copy()
         t0 = time.perf_counter()
         res = self.graph.optimize(c.optimizer_iterations, huber=c.loop_huber or None)
@@ -593,6 +612,29 @@ class SlamEngine:
         self.stats.loop_closures += 1
         self._last_loop_node = k
         self._optimize((res, elapsed))
+        return True
+
+    def _settle(self) -> bool:
+        """Wait for and apply a pending background solve (before a save, a flush, a mode switch)."""
+        return self._apply_job() if self._job is not None else False
+
+    def _apply_job(self) -> bool:
+        """Apply the background solve: its poses (later nodes carried rigidly), or, if the new loop edge is
+        still inconsistent after it, drop that edge and keep the poses. Returns whether the loop was kept."""
+        job, self._job = self._job, None
+        assert job is not None
+        job.wait()
+        if job.result is None:  # the solve raised (logged by the thread): keep the chain as it is
+            remove_edge(self.graph, job.edge)
+            return self._reject_loop("optimisation failed")
+        if not job.accepted:
+            remove_edge(self.graph, job.edge)
+            log.debug("slam: loop at node %d removed after optimisation (chi2 %.1f)", job.node, job.chi2)
+            return self._reject_loop("inconsistent after optimisation")
+        self.graph.poses = merged_poses(self.graph.poses, job.graph.poses)
+        self.stats.loop_closures += 1
+        self._last_loop_node = job.node  # the next attempt may follow at once: the cooldown ran meanwhile
+        self._optimize((job.result, job.seconds))
         return True
 
     def loop_windows(self) -> StepWindows:
@@ -680,6 +722,7 @@ class SlamEngine:
 
     def optimize(self) -> OptimizeResult | None:
         """Run a full optimisation now (e.g. before saving) and bring the map up to date; None without a graph."""
+        self._settle()
         if self.graph.n_edges == 0:
             return None
         self._optimize()

@@ -9,6 +9,7 @@ move is suspected to be an odometry glitch: the matcher then also tries "the rob
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 
 from .types import SlamConfig
@@ -21,6 +22,42 @@ class StepWindows:
     xy: float  # m half-width
     theta: float  # rad half-width
     wide: bool
+
+
+DEFAULT_PERIOD_S = 0.1  # s, scan period assumed before a stream's own is known
+GAP_PERIODS = 5.0  # a data gap counts only when it is this many of the stream's own mean scan periods
+
+
+class ScanClock:
+    """The stream's mean scan period over its last scans, so stamp irregularity is judged against the
+    stream itself. Real loggers stamp in bursts (the Intel log: a third of its scans < 20 ms after the
+    previous one, then gaps of 0.5 s): the gap between two stamps is then not the time the robot had to
+    move, and odometry steps over it are neither suspect nor a reason to widen the search."""
+
+    def __init__(self, memory: int = 32) -> None:
+        self._stamps: deque[float] = deque(maxlen=memory)
+
+    def period(self) -> float | None:
+        """Mean spacing of the remembered stamps (None before two scans or if they share one stamp)."""
+        if len(self._stamps) < 2:
+            return None
+        p = (self._stamps[-1] - self._stamps[0]) / (len(self._stamps) - 1)
+        return p if p > 1e-3 else None
+
+    def tick(self, stamp: float) -> None:
+        self._stamps.append(stamp)
+
+    def clear(self) -> None:
+        self._stamps.clear()
+
+
+def step_times(c: SlamConfig, gap: float, period: float | None) -> tuple[float, float]:
+    """(dt for the odometry-rate test, data gap for window widening) of a scan ``gap`` s after the previous
+    one in a stream whose mean period is ``period``: the rate is judged over at least one mean period
+    (burst stamps), and a gap counts only past ``GAP_PERIODS`` mean periods (and ``wide_step_gap_s``)."""
+    if period is None:  # the first scans of a stream: assume the common 10 Hz until the clock knows better
+        return max(gap, DEFAULT_PERIOD_S), gap
+    return max(gap, period), (gap if gap > GAP_PERIODS * period else 0.0)
 
 
 def search_windows(c: SlamConfig, dist: float, rot: float, gap: float) -> StepWindows:

@@ -75,6 +75,11 @@ class SlamConfig:
     loop_max_chi2: float = param(16.0, ge=0, doc="a new loop edge still this inconsistent after optimisation "
                                  "is removed")
     optimizer_iterations: int = param(15, ge=1, le=1000, doc="Gauss-Newton iterations per optimisation")
+    optimize_in_background: bool = param(True, doc="a loop closure's optimisation runs on a worker thread, off the "
+                                         "scan path; its result is applied optimize_apply_nodes nodes later")
+    optimize_apply_nodes: int = param(4, ge=1, le=10_000, doc="nodes after a loop closure at which its background "
+                                      "optimisation is applied (waited for there if still running: the result "
+                                      "depends on the input alone, never on the machine's speed)")
     re_render_threshold: float = param(0.02, ge=0, doc="m at max range; re-render a node's scan when it moved "
                                        "more")
     rerender_nodes_per_scan: int = param(12, ge=1, le=1_000_000, doc="nodes moved by an optimisation are "
@@ -121,6 +126,9 @@ class SlamConfig:
     loop_drift_per_m: float = param(0.0, ge=0, le=1.0, doc="m of position std dev accrued per m of matched travel "
                                     "(3 sigma widens the loop candidate radius); 0: only unmatched steps widen it "
                                     "(1 % cost 0.4 cm ATE on the hard sim loop: more, weaker candidates)")
+    loop_drift_theta_per_m: float = param(0.0, ge=0, le=1.0, doc="rad of heading std dev accrued per m of matched "
+                                          "travel (3 sigma widens the loop search's heading window): a small "
+                                          "heading error per match adds up over a long loop")
     no_return_clear_range: float = param(3.0, ge=0, le=100.0, doc="m; beams with no return (the range_max "
                                          "sentinel or +inf) clear free space this far, never a hit; 0 = off")
     # lifelong mapping: nodes bounded by the mapped area, not the distance driven
@@ -135,7 +143,7 @@ class SlamConfig:
     prune_min_covering: int = param(2, ge=1, le=100, doc="passes whose older nodes must cover a place before a newer "
                                     "node there is dropped: the map keeps this many views of each place and heading")
     # stamps
-    reorder_window_s: float = param(0.3, ge=0, le=5.0, doc="s; scans up to this late are sorted into stamp order "
+    reorder_window_s: float = param(1.0, ge=0, le=5.0, doc="s; scans up to this late are sorted into stamp order "
                                     "(output delayed by at most this); later ones are skipped")
     reorder_adaptive: bool = param(True, doc="hold scans for the window only once the stream has delivered a late "
                                    "scan: in-order streams keep zero latency")
