@@ -45,7 +45,7 @@ def register(sub: Any) -> None:
     d.add_argument("--rtf", type=float, default=3.0, help="sim real-time factor; 0 = as fast as possible (default 3)")
     d.add_argument("--seed", type=int, help="shuffle the scene's waypoints with this seed (default: file order)")
     d.add_argument("--out", help="output directory (default ./rbnx-demo/<timestamp>)")
-    d.add_argument("--deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
+    d.add_argument("-f", "--deploy", "--file", dest="deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
     d.add_argument("--timeout-per-goal", type=float, default=180.0, help="wall seconds per goal (default 180)")
     d.add_argument("--boot-timeout", type=float, default=120.0, help="wall seconds to come up (default 120)")
     d.add_argument("--lidar-noise", type=float, nargs=2, metavar=("STD_M", "DROPOUT"),
