@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from nav2_wrapper import warmup_note
 from nav2_wrapper.core import GoalRecord, Navigator
 from nav2_wrapper.core.grace import FAILED as GRACE_FAILED
 from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
@@ -293,6 +294,7 @@ class NavLoop:
             try:
                 self._watch_clock(now)
                 if reached and not kernels_wait(WAIT_SLICE_S):
+                    self._note_warmup()
                     continue  # a cold numba compile is running: wait outside the lock (status stays answered)
                 if reached:
                     self._step(now)
@@ -307,6 +309,14 @@ class NavLoop:
                 with self.lock:
                     self._end_active("navigation loop error (see provider log)", canceled=False)
                 self._stop.wait(0.05)
+
+    def _note_warmup(self) -> None:
+        """A goal accepted while the planner warms up stays PENDING and says why (clients start their
+        timeout when this note is gone: see nav2_wrapper.warmup_note)."""
+        with self.lock:
+            rec = self.nav.active
+            if rec is not None and rec.state == PENDING:
+                rec.detail = warmup_note.note()
 
     def _watch_clock(self, now: float) -> None:
         """Checks that must run even when sim time stands still: a /clock not advancing stops the robot at

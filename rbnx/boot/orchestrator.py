@@ -20,6 +20,7 @@ from typing import Any
 from rbnx.atlas_rpc import Atlas
 from rbnx.boot import deploytoken, procs
 from rbnx.boot.entry import EntryRunner, Timing
+from rbnx.boot.notes import NoteWatch
 from rbnx.boot.procs import ProcGroup, proc_start_ticks, spawn, tail
 from rbnx.boot.progress import ProgressView, Row
 from rbnx.boot.statefile import remove_state, state_path, write_state
@@ -343,8 +344,10 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
                 sup = Supervisor(orch.runners, atlas, opts.boot_timeout, save, view=orch.view,
                                  atlas_proc=atlas_group, atlas_policy=deploy.atlas_restart,
                                  respawn_atlas=respawn_atlas)
+                notes = NoteWatch()  # e.g. "nav2: warming up the planner (…): 20 s so far"
                 while not sig.stop.wait(SUPERVISE_PERIOD_S):
                     sup.poll()
+                    notes.poll(atlas, [r.name for r in orch.runners])
         return code
     finally:
         if not keep:

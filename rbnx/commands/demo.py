@@ -29,6 +29,7 @@ from rbnx.demo.record import Recorder, render_map
 from rbnx.demo.report import GoalResult, LiveLine, goals_exit_code, print_table, write_json
 from rbnx.demo.rpc import DemoRpc
 from rbnx.demo.variant import write_variant
+from robonix_common.jit_cache import writable_dir
 from robonix_nav_data import resources
 
 DEFAULT_DEPLOY = Path("examples") / "sim" / "deploy.yaml"
@@ -139,6 +140,10 @@ def _check_args(args: argparse.Namespace) -> tuple[Path, str, Path]:
     out = Path(args.out) if args.out else Path("rbnx-demo") / time.strftime("%Y%m%d-%H%M%S")
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out: {out} exists and is not a directory")
+    if not writable_dir(out):  # e.g. a read-only container's working folder: say so before booting anything
+        where = "--out" if args.out else "the default output folder"
+        raise UsageError(f"{where} {out.resolve()} cannot be written (read-only filesystem?); "
+                         "pass --out DIR on a writable one, e.g. --out /tmp/rbnx-demo")
     return deploy, scene, out.resolve()
 
 
