@@ -21,6 +21,7 @@ from rbnx.boot.supervise import RestartMode, RestartPolicy
 from rbnx.envexpand import apply_env_section, expand_tree
 from robonix_common.errors import field_path, field_problems
 from robonix_common.errors import validation_lines as common_validation_lines
+from robonix_nav_data import resources
 
 KINDS: tuple[str, ...] = ("primitive", "service", "skill")
 DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
@@ -416,6 +417,7 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     path = Path(path)
     label = label or str(path)
     base_env = dict(os.environ if base_env is None else base_env)
+    base_env.setdefault(resources.DATA_ROOT_ENV, str(resources.data_root()))  # what `rbnx init` copies name
     raw = read_yaml(path, label)
     if raw is None:
         raise ManifestProblems([f"{label}: empty file"])
