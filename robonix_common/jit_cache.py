@@ -60,8 +60,13 @@ def _seed(src: Path, dst: Path) -> bool:
 
 
 def _copy_if_absent(src: str, dst: str) -> None:
-    if not os.path.exists(dst):
-        shutil.copy2(src, dst)
+    """Copy under a temporary name, then rename: another process seeding the same cache (nav2 and SLAM
+    start together) sees either no file or a whole one, never half an index."""
+    if os.path.exists(dst):
+        return
+    tmp = f"{dst}.{os.getpid()}.tmp"
+    shutil.copy2(src, tmp)
+    os.replace(tmp, dst)
 
 
 def _disable_caching() -> None:
