@@ -11,17 +11,11 @@ robonix package written elsewhere) is not checked here; its CMD_INIT still is.
 from __future__ import annotations
 
 import importlib
-import re
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
-
-from rbnx.models import ResolvedEntry
-
-#: ``package.module:function`` (dotted module, one attribute).
-SCHEMA_RE = re.compile(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*")
 
 
 @contextmanager
@@ -58,18 +52,17 @@ def _message_lines(exc: Exception) -> list[str]:
     return lines or [text]
 
 
-def entry_problems(entry: ResolvedEntry, label: str) -> tuple[list[str], list[str]]:
-    """(problems, warnings) of one entry's config, each line ``<label>: <kind>[i] (<name>).config.<field>: …``."""
-    spec = getattr(entry.manifest, "configSchema", None)
+def entry_problems(spec: str | None, root: Path, config: dict[str, Any], where: str) -> tuple[list[str], list[str]]:
+    """(problems, warnings) of one entry's ``config`` against its package's ``configSchema`` ``spec``;
+    each line starts with ``where`` (``<file>: <kind>[i] (<name>).config``)."""
     if not spec:
         return [], []
-    where = f"{label}: {entry.key} ({entry.name}).config"
     try:
-        fn = load_schema(spec, entry.root)
+        fn = load_schema(spec, root)
     except (ImportError, AttributeError) as exc:
         return [], [f"{where}: not checked: cannot load configSchema {spec!r} ({exc})"]
     try:
-        fn(dict(entry.config))
+        fn(dict(config))
     except ValueError as exc:
         return [f"{where}.{line}" for line in _message_lines(exc)], []
     except Exception as exc:  # a schema bug must not hide behind a traceback; CMD_INIT will say more

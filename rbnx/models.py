@@ -471,7 +471,7 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
             if check_configs:
                 from rbnx.config_check import entry_problems
 
-                bad, notes = entry_problems(entry, label)
+                bad, notes = entry_problems(pm.configSchema, root, entry.config, f"{label}: {key} ({e.name}).config")
                 problems += bad
                 warnings += notes
     if problems:
