@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from nav2_wrapper import warmup_note
 from nav2_wrapper.core import GoalRecord, Navigator
 from nav2_wrapper.core.grace import FAILED as GRACE_FAILED
 from nav2_wrapper.core.grace import PAUSED as GRACE_PAUSED
@@ -297,6 +298,7 @@ class NavLoop:
                     due = now
                 self._watch_clock(now)
                 if reached and not kernels_wait(WAIT_SLICE_S):
+                    self._note_warmup()
                     continue  # a cold numba compile is running: wait outside the lock (status stays answered)
                 if reached:
                     self._step(now)
@@ -327,6 +329,14 @@ class NavLoop:
             self._end_active(f"simulator restarted: /clock went back from {old:.1f} s to {now:.1f} s; the robot's "
                              "pose before and after cannot be compared", canceled=False)
             self.publish_zero()
+
+    def _note_warmup(self) -> None:
+        """A goal accepted while the planner warms up stays PENDING and says why (clients start their
+        timeout when this note is gone: see nav2_wrapper.warmup_note)."""
+        with self.lock:
+            rec = self.nav.active
+            if rec is not None and rec.state == PENDING:
+                rec.detail = warmup_note.note()
 
     def _watch_clock(self, now: float) -> None:
         """Checks that must run even when sim time stands still: a /clock not advancing stops the robot at

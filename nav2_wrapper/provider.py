@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from nav2_wrapper import warmup_note
 from nav2_wrapper.core import Navigator
-from nav2_wrapper.core.warmup import compile_in_background
 from nav2_wrapper.params import LoadedParams, ParamsError, load_params
 from nav2_wrapper.params_schema import COMPAT_NOTE
 from nav2_wrapper.robot_io import RobotDescriptionError, load_robot
@@ -77,7 +77,7 @@ class NavProvider(SessionHost[NavSetup, NavLoop]):
         return s.work if s is not None else None
 
     def prepare(self, config: dict[str, Any]) -> NavSetup | Err | Deferred:
-        compile_in_background()  # once: numba kernels load/compile while we wait for the map
+        warmup_note.start(self.svc.push_detail)  # once: kernels load/compile (and say so) while we wait for the map
         try:
             cfg = parse_config(config)
         except ConfigError as exc:

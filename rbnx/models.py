@@ -16,15 +16,27 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from rbnx import safe_yaml
 from rbnx.boot.supervise import RestartMode, RestartPolicy
 from rbnx.envexpand import apply_env_section, expand_tree
 from robonix_common.errors import field_path, field_problems
 from robonix_common.errors import validation_lines as common_validation_lines
+from robonix_nav_data import resources
 
 KINDS: tuple[str, ...] = ("primitive", "service", "skill")
 DEFAULT_ATLAS_LISTEN = "127.0.0.1:50051"
 PACKAGE_MANIFEST = "package_manifest.yaml"
 DEFAULT_DEPLOY = "robonix_manifest.yaml"
+#: The manifestVersion values this rbnx understands (deploy files and package manifests); a newer file may
+#: mean keys that change what a boot does, so it is refused rather than half-understood.
+MANIFEST_VERSIONS: tuple[int, ...] = (1,)
+#: Entry names become log file names, run-dir keys and atlas provider ids: a safe, short pattern only.
+ENTRY_NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
+#: Top-level keys of a deploy file (robonix's set); anything else is a typo, refused with a suggestion.
+DEPLOY_KEYS: tuple[str, ...] = ("manifestVersion", "name", "env", "system", *("primitive", "service", "skill"))
+#: Keys of one deploy entry (robonix's plus rbnx's supervision and autostart).
+ENTRY_KEYS: tuple[str, ...] = ("name", "path", "url", "branch", "manifest", "config", "autostart",
+                               "restart", "restart_max", "restart_backoff_s")
 
 
 class ManifestProblems(Exception):
@@ -37,6 +49,22 @@ class ManifestProblems(Exception):
 
 def _none_to_list(v: Any) -> Any:
     return [] if v is None else v
+
+
+def _known_version(v: int) -> int:
+    if v not in MANIFEST_VERSIONS:
+        known = ", ".join(str(x) for x in MANIFEST_VERSIONS)
+        raise ValueError(f"version {v} is not supported by this rbnx (it reads {known}); upgrade rbnx")
+    return v
+
+
+def unknown_key(key: str, known: tuple[str, ...]) -> str:
+    """``unknown key 'servce' (did you mean 'service'?)``."""
+    import difflib
+
+    near = difflib.get_close_matches(str(key), known, n=1)
+    hint = f" (did you mean {near[0]!r}?)" if near else f" (expected one of: {', '.join(known)})"
+    return f"unknown key{hint}"
 
 
 def _scalar_to_str(v: Any) -> Any:
@@ -89,11 +117,16 @@ class PackageManifest(BaseModel):
     model_config = ConfigDict(extra="ignore", populate_by_name=True)
     manifestVersion: int = Field(ge=1)
     package: PackageInfo
+
+    _version = field_validator("manifestVersion")(_known_version)
     build: str | None = None
     start: str = Field(min_length=1)
     stop: str | None = None
     capabilities: list[CapabilityRef] = []
     depends: list[DependsRef] = []
+    #: ``module:function`` that validates the CMD_INIT config (raises ValueError naming the field); read by
+    #: rbnx validate/boot (rbnx/config_check.py). Ours, optional: robonix ignores unknown manifest keys.
+    configSchema: str | None = Field(None, pattern=r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$", max_length=256)
 
     _lists = field_validator("capabilities", "depends", mode="before")(_none_to_list)
 
@@ -158,9 +191,9 @@ class SystemSection(BaseModel):
 
 class DeployEntry(RestartFields):
     model_config = ConfigDict(extra="allow")
-    name: str
-    path: str | None = None
-    url: str | None = None
+    name: str = Field(max_length=64)
+    path: str | None = Field(None, max_length=4096)
+    url: str | None = Field(None, max_length=4096)
     branch: str | None = None
     manifest: str | None = None
     config: dict[str, Any] = {}
@@ -176,13 +209,16 @@ class DeployEntry(RestartFields):
             raise ValueError("must not be empty")
         if v != v.strip() or any(c.isspace() for c in v):
             raise ValueError(f"must not contain whitespace: {v!r}")
+        if not ENTRY_NAME_RE.fullmatch(v):
+            raise ValueError(f"{v!r} is not a valid name: letters, digits, '_', '.', '-' (not first), "
+                             "at most 64 characters")
         return v
 
 
 class DeployFile(BaseModel):
     model_config = ConfigDict(extra="allow")
     manifestVersion: int = Field(ge=1)
-    name: str = Field(min_length=1)
+    name: str = Field(min_length=1, max_length=256)
     env: dict[str, Any] = {}
     system: SystemSection = SystemSection()
     primitive: list[DeployEntry] = []
@@ -190,6 +226,7 @@ class DeployFile(BaseModel):
     skill: list[DeployEntry] = []
 
     _lists = field_validator("primitive", "service", "skill", mode="before")(_none_to_list)
+    _version = field_validator("manifestVersion")(_known_version)
     _env = field_validator("env", mode="before")(lambda v: {} if v is None else v)
     _sys = field_validator("system", mode="before")(lambda v: {} if v is None else v)
 
@@ -216,7 +253,9 @@ def read_yaml(path: Path, label: str | None = None) -> Any:
     except (OSError, UnicodeDecodeError) as exc:
         raise ManifestProblems([f"{label}: cannot read: {exc}"]) from None
     try:
-        return yaml.safe_load(text)
+        return safe_yaml.load(text)
+    except safe_yaml.YamlLimitError as exc:
+        raise ManifestProblems([f"{label}: refused: {exc}"]) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"{label}:{mark.line + 1}:{mark.column + 1}" if mark else label
@@ -315,6 +354,25 @@ def _url_checkout(url: str, deploy_dir: Path, env: Mapping[str, str]) -> Path:
     return packages_dir(deploy_dir, env) / base
 
 
+def _entry_root(e: DeployEntry, key: str, deploy_dir: Path, env: Mapping[str, str], label: str,
+                problems: list[str]) -> Path | None:
+    """The package folder of an entry (``path:`` or the local checkout of ``url:``); None and a problem
+    appended when it does not exist."""
+    if e.path is not None:
+        root = (deploy_dir / e.path).resolve()
+        if not root.is_dir():
+            problems.append(f"{label}: {key}.path: no such directory {e.path!r} ({root})")
+            return None
+        return root
+    assert e.url is not None
+    root = _url_checkout(e.url, deploy_dir, env)
+    if not root.is_dir():
+        problems.append(f"{label}: {key}.url: cannot fetch {e.url!r} (no network access); "
+                        f"clone it to {root} or use 'path:'")
+        return None
+    return root
+
+
 def _source_problems(data: Mapping[str, Any]) -> list[tuple[tuple[Any, ...], str]]:
     """Exactly one of path/url per entry, checked on the raw data so it is reported next to field errors."""
     out: list[tuple[tuple[Any, ...], str]] = []
@@ -350,11 +408,16 @@ def _expand_deploy(raw: dict[str, Any], base_env: dict[str, str],
     return expanded, env, [p if p.startswith(f"{label}: ") else f"{label}: {p}" for p in problems]
 
 
-def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: str | None = None) -> ResolvedDeploy:
-    """Parse, expand, validate a deploy file and every package it references; all problems at once."""
+def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: str | None = None,
+                check_configs: bool = False) -> ResolvedDeploy:
+    """Parse, expand, validate a deploy file and every package it references; all problems at once.
+
+    ``check_configs``: also check each entry's config against its package's ``configSchema`` (what
+    ``rbnx validate`` and ``rbnx boot`` do; see rbnx/config_check.py)."""
     path = Path(path)
     label = label or str(path)
     base_env = dict(os.environ if base_env is None else base_env)
+    base_env.setdefault(resources.DATA_ROOT_ENV, str(resources.data_root()))  # what `rbnx init` copies name
     raw = read_yaml(path, label)
     if raw is None:
         raise ManifestProblems([f"{label}: empty file"])
@@ -375,32 +438,23 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
     if problems:  # unexpanded paths would only add follow-on noise
         raise ManifestProblems(problems)
 
-    warnings = [f"{label}: {k}: unknown key (ignored)" for k in (model.model_extra or {})]
+    # A misspelt key (``servce:``) silently ignored would boot a different system than the file describes.
+    problems += [f"{label}: {k}: {unknown_key(k, DEPLOY_KEYS)}" for k in (model.model_extra or {})]
+    warnings: list[str] = []
     deploy_dir = path.resolve().parent
     seen: dict[str, str] = {}
     entries: list[ResolvedEntry] = []
     for kind in section_order(raw):
         for i, e in enumerate(getattr(model, kind)):
             key = f"{kind}[{i}]"
-            warnings += [f"{label}: {key}.{k}: unknown key (ignored)" for k in (e.model_extra or {})]
+            problems += [f"{label}: {key}.{k}: {unknown_key(k, ENTRY_KEYS)}" for k in (e.model_extra or {})]
             if e.name in seen:
                 problems.append(f"{label}: {key}.name: duplicate name {e.name!r} (first used by {seen[e.name]})")
                 continue
             seen[e.name] = key
-            if e.path is not None:
-                root = (deploy_dir / e.path).resolve()
-                if not root.is_dir():
-                    problems.append(f"{label}: {key}.path: no such directory {e.path!r} ({root})")
-                    continue
-            else:
-                assert e.url is not None
-                root = _url_checkout(e.url, deploy_dir, env)
-                if not root.is_dir():
-                    problems.append(
-                        f"{label}: {key}.url: cannot fetch {e.url!r} (no network access); "
-                        f"clone it to {root} or use 'path:'"
-                    )
-                    continue
+            root = _entry_root(e, key, deploy_dir, env, label, problems)
+            if root is None:
+                continue
             mfile = manifest_file(root, e.manifest)
             if not mfile.is_file():
                 what = f"{key}.manifest" if e.manifest else f"{key}.path"
@@ -411,8 +465,15 @@ def load_deploy(path: Path, base_env: Mapping[str, str] | None = None, label: st
             except ManifestProblems as mp:
                 problems += mp.lines
                 continue
-            entries.append(ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config), e.autostart,
-                                         e.restart_policy()))
+            entry = ResolvedEntry(e.name, kind, i, root, mfile, pm, dict(e.config), e.autostart,
+                                  e.restart_policy())
+            entries.append(entry)
+            if check_configs:
+                from rbnx.config_check import entry_problems
+
+                bad, notes = entry_problems(pm.configSchema, root, entry.config, f"{label}: {key} ({e.name}).config")
+                problems += bad
+                warnings += notes
     if problems:
         raise ManifestProblems(problems)
     atlas = model.system.atlas

@@ -304,6 +304,17 @@ class _Provider(TopicsMixin, RobonixProviderMixin):
                 self._declared[key] = _Declared(d.contract_id, final, d.transport, d.params, d.description)
             self._pending.clear()
 
+    def push_detail(self, detail: str) -> None:
+        """Show ``detail`` next to the current lifecycle state on the atlas (``rbnx boot``/``describe`` print
+        it), e.g. a long warm-up; "" clears it. Best effort: an unreachable atlas is only logged."""
+        with self._atlas_lock:
+            if not self._registered:
+                return
+            try:
+                self.atlas.set_state(self.id, LifecycleState.parse(self.lifecycle.state), detail)
+            except Exception as exc:  # a status note must never break the caller
+                log.debug("push_detail: %s", exc)
+
     def _push_state(self, state: str, detail: str) -> None:
         with self._atlas_lock:
             if self._registered:

@@ -89,13 +89,31 @@ def resolve_data_path(path: str | Path) -> Path:
 _PATH_LINE = re.compile(r"^(?P<lead>\s*(?:-\s+)?path:\s*)(?P<value>[^\s#]+)(?P<rest>.*)$")
 
 
+#: Set by rbnx (rbnx.models) to :func:`data_root` unless the environment has it: deploy files written by
+#: ``rbnx init`` name the installed packages through it.
+DATA_ROOT_ENV = "RBNX_DATA_ROOT"
+
+
+def _portable(target: Path) -> str:
+    """``${RBNX_DATA_ROOT}/<relative>`` for a folder of this installation, else the absolute path."""
+    root = data_root().resolve()
+    try:
+        rel = target.resolve().relative_to(root)
+    except ValueError:
+        return str(target)
+    return f"${{{DATA_ROOT_ENV}}}/{rel.as_posix()}" if rel.parts else f"${{{DATA_ROOT_ENV}}}"
+
+
 def copy_examples(dest: Path, names: tuple[str, ...] = EXAMPLES) -> list[Path]:
     """Write the example deploy folders under ``dest`` for a user to edit; returns the deploy files.
 
     An entry's ``path:`` that pointed into the installed tree (``../../hal_panda_mobile``) would not
-    resolve from ``dest``, so it is rewritten to the absolute folder it named; paths inside the example
-    itself (the minimal example's own packages) stay relative. Comments and layout are kept.
-    Refuses to overwrite: an existing ``dest/<name>`` is an error.
+    resolve from ``dest``, so it is rewritten to ``${RBNX_DATA_ROOT}/hal_panda_mobile``: rbnx sets
+    ``RBNX_DATA_ROOT`` to wherever this robonix-nav is installed, so the copy keeps working after a
+    reinstall, in another venv or on another machine (no absolute site-packages path is written). Paths
+    inside the example itself (the minimal example's own packages) stay relative. Comments and layout are
+    kept; comments naming ``examples/<name>/deploy.yaml`` name the copy instead. Refuses to overwrite: an
+    existing ``dest/<name>`` is an error.
     """
     src_root = examples_dir()
     clashes = [dest / n for n in names if (dest / n).exists()]
@@ -113,7 +131,9 @@ def copy_examples(dest: Path, names: tuple[str, ...] = EXAMPLES) -> list[Path]:
                 target = (src / m["value"]).resolve()
                 inside = target == src.resolve() or src.resolve() in target.parents
                 if target.is_dir() and not inside:
-                    line = f"{m['lead']}{target}{m['rest']}\n"
+                    line = f"{m['lead']}{_portable(target)}{m['rest']}\n"
+            elif line.lstrip().startswith("#"):
+                line = line.replace(f"examples/{name}/deploy.yaml", f"{name}/deploy.yaml")
             lines.append(line)
         deploy.write_text("".join(lines), encoding="utf-8")
         written.append(deploy)

@@ -13,8 +13,11 @@ trap "rm -rf '$src'" EXIT
 tar -C "$root" --exclude=./.git --exclude=./.venv --exclude=./venv --exclude=./build --exclude=./dist \
   --exclude='*.egg-info' --exclude=__pycache__ --exclude=./rbnx-demo --exclude=./rbnx-logs -c . | tar -C "$src" -x
 rm -f "$out"/robonix_nav-*.whl
-iso=(--no-build-isolation)  # reuse this interpreter's setuptools when it has one (no index needed)
-"$py" -c "import setuptools" 2>/dev/null || iso=()
+# Build isolation: pip installs what pyproject's [build-system] requires (setuptools>=68, wheel) into a
+# throw-away environment, so a fresh venv (setuptools without `wheel`, or an old one) builds too.
+# Offline with those already installed: RBNX_WHEEL_NO_ISOLATION=1 reuses this interpreter's.
+iso=()
+[ "${RBNX_WHEEL_NO_ISOLATION:-0}" = 1 ] && iso=(--no-build-isolation)
 "$py" -m pip wheel -q --no-deps "${iso[@]}" -w "$out" "$src" >"$src/pip.log" 2>&1 \
   || { tail -30 "$src/pip.log" >&2; exit 1; }
 ls "$out"/robonix_nav-*.whl

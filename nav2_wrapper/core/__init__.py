@@ -4,6 +4,8 @@ Imports only numpy/scipy/numba and robonix_common (a test enforces it); robot de
 are read by ``nav2_wrapper.robot_io`` and ``nav2_wrapper.params``, which pass the results in.
 """
 
+from robonix_common import jit_setup  # noqa: F401  (first: numba's cache dir, before any kernel)
+
 from .checkers import GoalChecker, GoalCheckerConfig, ProgressChecker, ProgressCheckerConfig
 from .controller import ControllerConfig, ControlOutput, HolonomicController
 from .costmap import Costmap, CostmapConfig, ObservationSource, Scan

@@ -79,6 +79,9 @@ class EntryRunner:
     _retry_cmd: int = 0
     _atlas_addr: str = ""
     _stale_reg: str = ""
+    #: CMD_INIT answered Err (not Deferred, not a timeout): the provider refused its config, which no retry
+    #: or restart can change, so the boot stops (see Orchestrator.boot)
+    refused: bool = False
     restart_tracker: RestartTracker = field(init=False)
     #: the activation state to drive a restarted process back to (what the atlas showed at its death)
     restart_target: str | None = None
@@ -257,6 +260,7 @@ class EntryRunner:
         elif "deadline_exceeded" in reply.error:
             self._fail(f"{what} timed out after {self.timing.driver_timeout:g}s", with_log=True)
         else:
+            self.refused = self._cmd == CMD.CMD_INIT
             self._fail(f"{what}: {reply.error or reply.state or 'failed'}", with_log=True)
 
     # ------------------------------------------------------------------ outcomes

@@ -20,6 +20,7 @@ from typing import Any
 from rbnx.atlas_rpc import Atlas
 from rbnx.boot import deploytoken, procs
 from rbnx.boot.entry import EntryRunner, Timing
+from rbnx.boot.notes import NoteWatch
 from rbnx.boot.procs import ProcGroup, proc_start_ticks, spawn, tail
 from rbnx.boot.progress import ProgressView, Row
 from rbnx.boot.statefile import remove_state, state_path, write_state
@@ -180,12 +181,18 @@ class Orchestrator:
                 self._sync_view()
                 if not queue and all(r.settled for r in self.runners):
                     break
+                if self.refused():  # final: waiting out the deadline cannot change a refused config
+                    break
                 self.stop.wait(0.05)
         for r in self.runners:
             if not r.settled:
                 r.abort()
         self.view.finish()
         return all(r.ok for r in self.runners)
+
+    def refused(self) -> list[EntryRunner]:
+        """Entries whose CMD_INIT was refused (Err, not Deferred)."""
+        return [r for r in self.runners if r.refused]
 
     def shutdown_order(self) -> list[EntryRunner]:
         """Reverse of the order entries became ready (dependents first); unsettled/failed ones first."""
@@ -245,7 +252,8 @@ def _summary(orch: Orchestrator, name: str, atlas_addr: str, elapsed: float, log
 
 
 def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
-    """The whole boot; returns the exit code (0 all ready, 1 some failed, 130 interrupted during boot)."""
+    """The whole boot; returns the exit code (0 all ready, 1 some failed, 2 a CMD_INIT refused its config
+    (everything started is stopped), 130 interrupted during boot)."""
     sig = _Signals()
     sig.install()
     procs.set_supervised(not opts.exit_after_boot)
@@ -309,6 +317,9 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
         if sig.stop.is_set():
             print("rbnx boot: interrupted; shutting down", flush=True)
             code = 130
+        elif orch.refused():
+            _report_refused(orch)
+            return 2
         else:
             _summary(orch, deploy.name, atlas_addr, time.monotonic() - t0, opts.log_dir, opts.verbose)
             code = 0 if all_ok else 1
@@ -333,14 +344,23 @@ def run_boot(deploy: ResolvedDeploy, opts: BootOptions) -> int:
                 sup = Supervisor(orch.runners, atlas, opts.boot_timeout, save, view=orch.view,
                                  atlas_proc=atlas_group, atlas_policy=deploy.atlas_restart,
                                  respawn_atlas=respawn_atlas)
+                notes = NoteWatch()  # e.g. "nav2: warming up the planner (…): 20 s so far"
                 while not sig.stop.wait(SUPERVISE_PERIOD_S):
                     sup.poll()
+                    notes.poll(atlas, [r.name for r in orch.runners])
         return code
     finally:
         if not keep:
             _teardown(orch, atlas_group, opts, sig, gateway)
             remove_state(spath)
         sig.restore()
+
+
+def _report_refused(orch: Orchestrator) -> None:
+    """One line per entry whose CMD_INIT refused its config (entry and field), then what happens next."""
+    for r in orch.refused():
+        print(f"rbnx boot: {r.entry.key} ({r.name}): {r.failure} [log {r.log_path}]", file=sys.stderr, flush=True)
+    print("rbnx boot: a refused CMD_INIT is final; stopping everything started", file=sys.stderr, flush=True)
 
 
 def _start_gateway(orch: Orchestrator, atlas_addr: str, opts: BootOptions, sig: _Signals, on_ready: Any) -> Any:

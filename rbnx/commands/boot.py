@@ -57,7 +57,8 @@ def _run(args: argparse.Namespace) -> int:
     from rbnx.models import load_deploy
 
     path = Path(args.file or DEFAULT_DEPLOY)
-    deploy = load_deploy(path)  # ManifestProblems -> exit 2 in cli.main, nothing started
+    # ManifestProblems (each entry's config too, against its package's own schema) -> exit 2, nothing started
+    deploy = load_deploy(path, check_configs=True)
     for w in deploy.warnings:
         print(f"warning: {w}", file=sys.stderr)
     st = read_state(state_path(deploy.path, deploy.atlas_listen))

@@ -29,6 +29,7 @@ from rbnx.demo.record import Recorder, render_map
 from rbnx.demo.report import GoalResult, LiveLine, goals_exit_code, print_table, write_json
 from rbnx.demo.rpc import DemoRpc
 from rbnx.demo.variant import write_variant
+from robonix_common.jit_cache import writable_dir
 from robonix_nav_data import resources
 
 DEFAULT_DEPLOY = Path("examples") / "sim" / "deploy.yaml"
@@ -45,7 +46,7 @@ def register(sub: Any) -> None:
     d.add_argument("--rtf", type=float, default=3.0, help="sim real-time factor; 0 = as fast as possible (default 3)")
     d.add_argument("--seed", type=int, help="shuffle the scene's waypoints with this seed (default: file order)")
     d.add_argument("--out", help="output directory (default ./rbnx-demo/<timestamp>)")
-    d.add_argument("--deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
+    d.add_argument("-f", "--deploy", "--file", dest="deploy", help=f"deploy file (default {DEFAULT_DEPLOY})")
     d.add_argument("--timeout-per-goal", type=float, default=180.0, help="wall seconds per goal (default 180)")
     d.add_argument("--boot-timeout", type=float, default=120.0, help="wall seconds to come up (default 120)")
     d.add_argument("--lidar-noise", type=float, nargs=2, metavar=("STD_M", "DROPOUT"),
@@ -139,6 +140,10 @@ def _check_args(args: argparse.Namespace) -> tuple[Path, str, Path]:
     out = Path(args.out) if args.out else Path("rbnx-demo") / time.strftime("%Y%m%d-%H%M%S")
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out: {out} exists and is not a directory")
+    if not writable_dir(out):  # e.g. a read-only container's working folder: say so before booting anything
+        where = "--out" if args.out else "the default output folder"
+        raise UsageError(f"{where} {out.resolve()} cannot be written (read-only filesystem?); "
+                         "pass --out DIR on a writable one, e.g. --out /tmp/rbnx-demo")
     return deploy, scene, out.resolve()
 
 

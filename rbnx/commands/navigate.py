@@ -20,7 +20,7 @@ import time
 from typing import Any
 
 from rbnx.demo.boot import DemoError
-from rbnx.demo.goals import TERMINAL, Goal
+from rbnx.demo.goals import TERMINAL, Goal, warming_up
 from rbnx.demo.report import LiveLine
 from rbnx.demo.rpc import CANCEL, STATUS, DemoRpc
 
@@ -80,10 +80,10 @@ def run(args: argparse.Namespace) -> int:
 
 def _follow(rpc: DemoRpc, run_id: str, stop: threading.Event, timeout: float) -> int:
     line = LiveLine()
-    t0 = time.monotonic()
+    t0 = t_limit = time.monotonic()
     lost: float | None = None  # when status stopped answering
     while True:
-        if stop.is_set() or (timeout and time.monotonic() - t0 > timeout):
+        if stop.is_set() or (timeout and time.monotonic() - t_limit > timeout):
             why = "interrupted" if stop.is_set() else f"timeout after {timeout:g}s"
             accepted, detail = rpc.cancel_run(run_id)
             line.done(f"{why}: cancel {'sent' if accepted else 'refused'} ({detail})")
@@ -104,6 +104,8 @@ def _follow(rpc: DemoRpc, run_id: str, stop: threading.Event, timeout: float) ->
         if not st.known:
             line.done(f"run {run_id}: unknown to the navigation provider ({st.detail})")
             return 1
+        if warming_up(st.state, st.detail):
+            t_limit = time.monotonic()  # --timeout starts when the planner's first-run warm-up ended
         line.update(st.state, f"{st.state} {time.monotonic() - t0:5.1f}s  {st.detail}")
         if st.state in TERMINAL:
             line.done(f"{st.state}: {st.detail}")

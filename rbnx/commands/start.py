@@ -13,7 +13,7 @@ from rbnx.atlas_rpc import Atlas
 from rbnx.boot.entry import Timing
 from rbnx.boot.orchestrator import BootOptions, Orchestrator, _Signals
 from rbnx.commands.common import default_log_dir, parse_sets
-from rbnx.models import ManifestProblems, ResolvedEntry, load_package, manifest_file, read_yaml
+from rbnx.models import ENTRY_NAME_RE, ManifestProblems, ResolvedEntry, load_package, manifest_file, read_yaml
 
 
 def register(sub: Any) -> None:
@@ -43,12 +43,15 @@ def run(args: argparse.Namespace) -> int:
             raise ManifestProblems([f"{args.config}: config must be a mapping"])
         config = dict(data or {})
     parse_sets(args.set or [], config)
+    name = args.name or pm.package.name
+    if not ENTRY_NAME_RE.fullmatch(name):  # the name becomes <log-dir>/<name>.log and the provider id
+        raise ManifestProblems([f"--name: {name[:80]!r} is not a valid instance name (letters, digits, '_', '.', "
+                                "'-' (not first), at most 64 characters)"])
     atlas_addr = args.endpoint or args.atlas
     with Atlas(atlas_addr) as atlas:
         if not atlas.ping(2.0):
             print(f"rbnx start: atlas not reachable at {atlas_addr}", file=sys.stderr)
             return 1
-    name = args.name or pm.package.name
     mpath = manifest_file(root, args.manifest) if Path(args.package).is_dir() else Path(args.package).resolve()
     entry = ResolvedEntry(name, args.kind, 0, root, mpath, pm, config)
     log_dir = Path(args.log_dir) if args.log_dir else default_log_dir()

@@ -20,9 +20,11 @@ from rbnx.models import (
 
 
 def register(sub: Any) -> None:
-    """``validate [PATH ...]``."""
-    v = sub.add_parser("validate", help="check deploy files and package manifests")
+    """``validate [PATH ...] [-f FILE ...]``."""
+    v = sub.add_parser("validate", help="check deploy files (each entry's config too) and package manifests")
     v.add_argument("paths", nargs="*", help=f"files or package dirs (default {DEFAULT_DEPLOY})")
+    v.add_argument("-f", "--file", action="append", default=[], dest="files", metavar="FILE",
+                   help="deploy file, as for the other commands (repeatable; same as a positional path)")
     v.set_defaults(run=run)
 
 
@@ -39,10 +41,10 @@ def validate_path(path: Path) -> tuple[list[str], str]:
             pm = parse_package(data, label)
             return [], f"package {pm.package.name!r}"
         if kind == "deploy":
-            dep = load_deploy(path, label=label)
+            dep = load_deploy(path, label=label, check_configs=True)
             for w in dep.warnings:
                 print(f"warning: {w}", file=sys.stderr)
-            return [], f"deploy {dep.name!r} with {len(dep.entries)} entries (all packages valid)"
+            return [], f"deploy {dep.name!r} with {len(dep.entries)} entries (all packages and configs valid)"
         if data is None:
             return [f"{label}: empty file"], ""
         return [f"{label}: neither a deploy file (primitive/service/skill/system keys) "
@@ -53,7 +55,7 @@ def validate_path(path: Path) -> tuple[list[str], str]:
 
 def run(args: argparse.Namespace) -> int:
     """Check each deploy file or package manifest; print one line per problem and exit 2 when there are any."""
-    paths = [Path(p) for p in args.paths]
+    paths = [Path(p) for p in [*args.paths, *getattr(args, "files", [])]]
     if not paths:
         default = Path(DEFAULT_DEPLOY)
         paths = [default if default.exists() else Path(PACKAGE_MANIFEST)]

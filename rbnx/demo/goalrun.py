@@ -10,7 +10,7 @@ import time
 from typing import Any
 
 from rbnx.demo.boot import BootChild, DemoError
-from rbnx.demo.goals import TERMINAL, fmt_s, parse_detail, path_length
+from rbnx.demo.goals import TERMINAL, fmt_s, parse_detail, path_length, warming_up
 from rbnx.demo.record import Recorder
 from rbnx.demo.report import GoalResult, LiveLine
 from rbnx.demo.rpc import DemoRpc
@@ -42,6 +42,7 @@ class GoalRunner:
             self.line.done(f"{tag}: REJECTED: {res.detail}")
             return res
         st_state, errors = "PENDING", 0
+        t_limit = t0
         while True:
             if not self.boot.running():
                 raise DemoError(f"rbnx boot exited (code {self.boot.proc.returncode if self.boot.proc else '?'}) "
@@ -50,7 +51,7 @@ class GoalRunner:
                 self.rpc.cancel(res.run_id)
                 st_state, res.detail = "CANCELED", "interrupted by the user"
                 break
-            if time.monotonic() - t0 > self.timeout_s:
+            if time.monotonic() - t_limit > self.timeout_s:
                 self.rpc.cancel(res.run_id)
                 st_state, res.detail = "TIMEOUT", f"no result after {self.timeout_s:g} s wall (goal cancelled)"
                 break
@@ -65,6 +66,8 @@ class GoalRunner:
                 self.stop.wait(POLL_S)
                 continue
             st_state, res.detail = st.state, st.detail
+            if warming_up(st_state, res.detail):
+                t_limit = time.monotonic()  # the per-goal timeout starts when the planner's warm-up ended
             self._note_status(res, st_state, res.detail)
             if st_state in TERMINAL:
                 break

@@ -11,6 +11,13 @@ from dataclasses import dataclass
 # nav2_wrapper's RUNNING detail, e.g. "2.88 m remaining, ETA 6 s, 0 recoveries[, blocked]".
 _DETAIL_RE = re.compile(r"(?P<left>[0-9.]+) m remaining, ETA (?P<eta>[0-9.]+) s(?:, (?P<rec>\d+) recoveries)?")
 TERMINAL = ("SUCCEEDED", "FAILED", "CANCELED")
+#: How the navigation provider's PENDING detail starts while its planner warms up (nav2_wrapper.warmup_note).
+WARMING = "warming up the planner"
+
+
+def warming_up(state: str, detail: str) -> bool:
+    """A goal waiting for the planner's first-run warm-up: a client's timeout starts only after it."""
+    return state == "PENDING" and detail.startswith(WARMING)
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,7 @@
 Session files are :mod:`slam_service.session_io`; the PNG map card is :mod:`slam_service.render`.
 """
 
+from robonix_common import jit_setup  # noqa: F401  (first: numba's cache dir, before any kernel)
 from robonix_common.scan import Scan
 
 from .engine import SlamEngine

@@ -296,3 +296,31 @@ def test_start_one_package_against_running_atlas(tmp_path: Path, minimal: tuple[
         if start is not None and start.poll() is None:
             start.kill()
         boot.kill()
+
+
+def test_refused_cmd_init_stops_the_boot_exit_2(tmp_path: Path) -> None:
+    """A provider answering Err to CMD_INIT (its config refused) is final: rbnx boot does not wait out the
+    boot deadline; it names the entry and the field, stops everything it started and exits 2."""
+    root = copy_minimal(tmp_path)
+    prim = root / "odom_primitive" / "provider_odom.py"
+    prim.write_text(prim.read_text().replace(
+        "from robonix_api import Ok, Primitive", "from robonix_api import Err, Ok, Primitive").replace(
+        "def init(cfg: dict) -> Ok:\n",
+        "def init(cfg: dict) -> Ok:\n    if not str(cfg.get('topic', '/')).startswith('/'):\n"
+        "        return Err(f\"topic: must start with '/', got {cfg['topic']!r}\")\n"))
+    deploy = root / "deploy.yaml"
+    deploy.write_text(deploy.read_text().replace("topic: /odom", "topic: odom"))
+    boot = Boot(tmp_path, deploy, make_env(tmp_path), "--boot-timeout", "3600", "--no-progress")
+    try:
+        code = boot.proc.wait(600)  # waiting like for a Deferred would last the whole hour
+        out = boot.text()
+        assert code == 2, out
+        assert "rbnx boot: primitive[0] (odom_primitive): CMD_INIT: topic: must start with '/', got 'odom'" in out
+        assert "running;" not in out
+        st = json.loads((tmp_path / "logs" / "rbnx-boot.json").read_text())  # the last state rbnx recorded
+        assert {c["name"] for c in st["children"]} == {"odom_primitive", "odom_consumer"}
+        pids, pgids = recorded(st)
+        wait_until(lambda: all_gone(pids, pgids), 30, "every recorded process to be gone")
+        assert not list((tmp_path / "state").glob("boot-*.json"))
+    finally:
+        boot.kill()

@@ -90,6 +90,11 @@ def test_copied_examples_point_at_the_installed_packages(tmp_path: Path) -> None
     roots = {e.name: e.root for e in sim.entries}
     assert roots["panda_mobile"] == resources.example_deploy("sim").parents[2] / "hal_panda_mobile"
     assert all(r.is_absolute() and (r / "package_manifest.yaml").is_file() for r in roots.values())
+    text = (tmp_path / "ex" / "sim" / "deploy.yaml").read_text()
+    assert "path: ${RBNX_DATA_ROOT}/hal_panda_mobile" in text  # portable: no site-packages path written
+    assert str(resources.data_root()) not in text
+    assert "examples/sim" not in text  # comments name the copy
+    assert "rbnx boot -f sim/deploy.yaml" in text
     minimal = (tmp_path / "ex" / "minimal" / "deploy.yaml").read_text()
     assert "path: odom_consumer" in minimal  # the example's own packages stay relative
     assert "# Minimal deploy" in minimal  # comments kept

@@ -150,12 +150,16 @@ def test_sections_boot_in_file_order(tmp_path: Path) -> None:
     assert [e.name for e in load_deploy(d, base_env={}).entries] == ["b", "a"]
 
 
-def test_unknown_deploy_keys_warn(tmp_path: Path) -> None:
+def test_unknown_deploy_keys_are_errors(tmp_path: Path) -> None:
+    """A misspelt key silently ignored boots a different system than the file describes."""
     write_pkg(tmp_path, "a")
     d = write_deploy(tmp_path, {"manifestVersion": 1, "name": "x", "extra": 1,
                                 "primitive": [{"name": "a", "path": "a", "confg": {}}]})
-    assert load_deploy(d, base_env={}).warnings == [f"{d}: extra: unknown key (ignored)",
-                                                    f"{d}: primitive[0].confg: unknown key (ignored)"]
+    with pytest.raises(ManifestProblems) as exc:
+        load_deploy(d, base_env={})
+    assert exc.value.lines == [
+        f"{d}: extra: unknown key (expected one of: manifestVersion, name, env, system, primitive, service, skill)",
+        f"{d}: primitive[0].confg: unknown key (did you mean 'config'?)"]
 
 
 def test_package_manifest_rules(tmp_path: Path) -> None:

@@ -117,3 +117,32 @@ def test_sim_deploy_with_nav2_in_the_container(image: str, tmp_path: Path) -> No
         assert "robonix-nav2-nav2-sim-navigation-" not in left, left
     finally:
         stop_process(proc, 60.0, kill_timeout=30.0, first=signal.SIGINT)   # Ctrl-C is rbnx boot's clean stop
+
+
+def _run_ro(img: str, *cmd: str, timeout: float = 900) -> subprocess.CompletedProcess[str]:
+    """``--read-only``: podman then mounts a tmpfs on /tmp (and /run, /var/tmp), nothing else is writable."""
+    return _engine("run", "--rm", "--pull=never", "--network", "none", "--no-healthcheck", "--read-only", img,
+                   *cmd, timeout=timeout)
+
+
+def test_read_only_container_loads_the_shipped_kernels(image: str) -> None:
+    """The image's compiled kernels seed a writable cache in /tmp: one line says so, nothing recompiles."""
+    code = ("import time; t = time.perf_counter(); import nav2_wrapper.core.warmup as w; "
+            "w.compile_kernels(); print('warm', round(time.perf_counter() - t, 1))")
+    r = _run_ro(image, "python", "-c", code, timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("robonix: JIT cache")]
+    assert lines == ["robonix: JIT cache: /var/cache/robonix/numba is not writable; using "
+                     "/tmp/robonix-10001/numba (seeded from /var/cache/robonix/numba)"], r.stderr
+
+
+def test_read_only_demo_needs_out_and_runs_with_tmpfs_out(image: str) -> None:
+    r = _run_ro(image, "rbnx", "demo", "--goals", "1", timeout=120)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "/var/lib/robonix/rbnx-demo/" in r.stderr
+    assert "--out" in r.stderr
+    assert "Traceback" not in r.stderr
+    r = _run_ro(image, "rbnx", "demo", "--goals", "1", "--scene", "kitchen", "--rtf", "2", "--out", "/tmp/out")
+    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
+    assert "1/1 goals succeeded" in r.stdout
