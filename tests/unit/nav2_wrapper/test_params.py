@@ -75,7 +75,8 @@ def test_missing_scan_disables_obstacle_layer_with_warning():
 
 def _with_planner(plugin: str, smooth: str = "true") -> str:
     text = profile_path("sim").read_text()
-    assert 'plugin: "robonix_nav/CostAwareAStar"' in text and "smooth_path: true" in text
+    assert 'plugin: "robonix_nav/CostAwareAStar"' in text
+    assert "smooth_path: true" in text
     text = text.replace("smooth_path: true", f"smooth_path: {smooth}", 1)
     return text.replace('plugin: "robonix_nav/CostAwareAStar"', f'plugin: "{plugin}"', 1)
 
