@@ -21,8 +21,10 @@ Invariants (stated once, relied on by the planner and the tests):
 - The search stops when a bucket is emptied and the goal's g is not above the next bucket's lower edge:
   every open cell has f ≥ that edge, so nothing cheaper can arrive. Cells popped with f ≥ the goal's g are
   closed unexpanded.
-- An expansion skips the three moves pointing back past its predecessor p (negative dot product with the
-  arrival move): p reaches each of them by a shorter move into the same cell, so no cheapest path needs them.
+- An expansion skips the moves whose neighbour its predecessor p reaches strictly cheaper without it
+  (``_dominated``): the three pointing back past p, and away from the map edge and the escape disc the side
+  neighbours p reaches by its own diagonal or by two straight moves. p was expanded before, so those
+  neighbours have that cheaper g already; no cheapest path needs the skipped moves.
 - On failure (no path) every cell reachable from the start is closed.
 
 Search state lives in one int32 buffer of 2 words per cell (an 8-byte record: a relaxation touches one
@@ -71,6 +73,7 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, weight, h_sca
     gr, gc = goal // cols, goal % cols
     seen = stamp << STATE_SHIFT
     hw = weight * h_scale
+    far2 = (math.sqrt(max(esc_r2, 0.0)) + 2.0) ** 2    # beyond this from the start no neighbour is in the disc
     inv = 1.0 / width
     mask = nbuckets - 1
     offs = DR * cols + DC
@@ -103,9 +106,10 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, weight, h_sca
             expansions += 1
             d = (st >> 1) & 15
             edge = r == 0 or c == 0 or r == rows - 1 or c == cols - 1
+            plain = not edge and (r - sr) * (r - sr) + (c - sc) * (c - sc) > far2
             for k in range(8):
-                if d != NO_MOVE and DR[k] * DR[d] + DC[k] * DC[d] < 0:
-                    continue                            # behind the arrival: the predecessor reaches it cheaper
+                if d != NO_MOVE and _dominated(flat, table, cur, d, k, cols, plain):
+                    continue                            # the predecessor reaches that neighbour cheaper
                 nr, nc = r + DR[k], c + DC[k]
                 if edge and (nr < 0 or nr >= rows or nc < 0 or nc >= cols):
                     continue
@@ -138,6 +142,27 @@ def astar(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, weight, h_sca
             return True, expansions
         cb += 1
     return rec[2 * goal] >= seen and rec[2 * goal] & 1 == 1, expansions
+
+
+@njit(cache=True)
+def _dominated(flat, table, cur, d, k, cols, plain):
+    """Whether move ``k`` out of ``cur`` (reached by move ``d`` from p = cur − d) can be skipped: p reaches that
+    neighbour n strictly cheaper without ``cur``, and p has been expanded, so n has that g already. Always for
+    the three moves pointing back past p (a shorter move from p, or p itself). For a ``plain`` cell (off the
+    map edge and clear of the escape disc, so the weights are the table's): after a straight arrival, a side
+    neighbour when p's diagonal costs less (√2·w(n) < w(cur) + w(n)); after a diagonal arrival, a side
+    diagonal when p's two straight moves through m cost less (w(m) + w(n) < √2·(w(cur) + w(n)))."""
+    dot = DR[k] * DR[d] + DC[k] * DC[d]
+    if dot < 0:
+        return True
+    if dot > 0 or not plain:
+        return False
+    wn = table[flat[cur + DR[k] * cols + DC[k]]]
+    wc = table[flat[cur]]
+    if d < 4:
+        return SQRT2 * wn < wc + wn
+    m = cur - (DC[d] if DR[k] == DR[d] else DR[d] * cols)
+    return table[flat[m]] + wn < SQRT2 * (wc + wn)
 
 
 @njit(cache=True)
