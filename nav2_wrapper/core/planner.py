@@ -21,6 +21,7 @@ from .se2_planner import Se2PlannerConfig
 
 SQRT2 = math.sqrt(2.0)
 
+
 @dataclass
 class PlannerConfig:
     """The planner plugin's parameters (``planner_server.<plugin>`` in a params profile)."""
