@@ -155,10 +155,13 @@ def _dominated(flat, table, cur, d, k, cols, plain):
     dot = DR[k] * DR[d] + DC[k] * DC[d]
     if dot < 0:
         return True
-    if dot > 0 or not plain:
+    if not plain or (dot > 0 and (d >= 4 or k < 4)):
         return False
     wn = table[flat[cur + DR[k] * cols + DC[k]]]
     wc = table[flat[cur]]
+    if dot > 0:     # a forward diagonal after a straight arrival: p's diagonal to the side cell s, then straight
+        side = cur + (DR[k] - DR[d]) * cols + (DC[k] - DC[d])
+        return SQRT2 * table[flat[side]] + wn <= wc + SQRT2 * wn
     if d < 4:
         return SQRT2 * wn < wc + wn
     m = cur - (DC[d] if DR[k] == DR[d] else DR[d] * cols)
