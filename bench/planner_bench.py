@@ -18,11 +18,14 @@ Reports median/p95/max plan time per density and setting (wall clock, and the pl
 time, which a loaded machine inflates far less), our time / peer time, expansions, the load average at
 start and end, and the controller's compute time per step. Writes bench/results/planner.json.
 
-``--ab`` compares the cost-optimal kernels instead (no peer, no controller): each pair is planned by the
-chained kernel and by the plain bucket kernel back to back (order alternating per pair), and per kernel the
-CPU time, queue pops (expansions) and cells expanded by scans are reported, plus the median of the paired CPU
-ratios and a check that both found the same cost. ``--ab-width W`` does the same for the default kernel at the
-default bucket width (planner.BUCKET_WIDTH) and at W. Writes bench/results/planner_ab.json.
+Every pair is also planned by the reference planner (``nav2_wrapper.core.reference``, a textbook A*): ours
+must never be costlier (``costlier_than_reference`` counts the pairs where it is, to a relative 1e-5; float32
+g), and its time is reported beside.
+
+``--ab-width W`` compares bucket widths instead (no peer, no controller): each pair is planned at the default
+``bucket_width`` and at W back to back (order alternating per pair); per width the CPU time and queue pops
+(expansions) are reported, plus the median of the paired CPU ratios and a check that both found the same cost.
+Writes bench/results/planner_ab.json.
 """
 
 from __future__ import annotations
@@ -32,17 +35,12 @@ import json
 import math
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from nav2_wrapper.core import (
-    INSCRIBED,
     ControllerConfig,
     Costmap,
     CostmapConfig,
@@ -50,54 +48,14 @@ from nav2_wrapper.core import (
     HolonomicController,
     PlannerConfig,
 )
-from nav2_wrapper.core import planner as planner_module
+from nav2_wrapper.core.reference import reference_plan
 from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
+from robonix_eval.planner_maps import RES, SETTINGS, Cell, make_map, pick_pairs, world
 
-Cell = tuple[int, int]
-RES = 0.05
-SETTINGS = {"near": (3.0, math.inf), "far": (60.0, 95.0)}   # start-goal distance ranges, m
 OUT = Path(__file__).resolve().parent / "results" / "planner.json"
 OUT_AB = OUT.with_name("planner_ab.json")
-KERNELS = planner_module.KERNELS
-DEFAULT_WIDTH = planner_module.BUCKET_WIDTH    # captured before any A/B sets the module's value
-
-
-def make_map(size: int, density: float, rng: np.random.Generator) -> np.ndarray:
-    occ = np.zeros((size, size), bool)
-    yy, xx = np.mgrid[-20:21, -20:21]
-    while occ.mean() < density:
-        for _ in range(max(1, int((density - occ.mean()) * size * size / 600))):
-            r, c = rng.integers(0, size, 2)
-            if rng.random() < 0.7:
-                h, w = rng.integers(4, 41, 2)
-                occ[r:r + h, c:c + w] = True
-            else:
-                rad = int(rng.integers(3, 21))
-                disc = (yy ** 2 + xx ** 2) <= rad * rad
-                r0, c0 = max(0, r - 20), max(0, c - 20)
-                sub = disc[r0 - (r - 20):, c0 - (c - 20):][: size - r0, : size - c0]
-                occ[r0:r0 + sub.shape[0], c0:c0 + sub.shape[1]] |= sub
-    return np.where(occ, 100, 0).astype(np.int8)
-
-
-def pick_pairs(cm: Costmap, n: int, rng: np.random.Generator, lo: float, hi: float) -> list[tuple[Cell, Cell]]:
-    """n random (start, goal) cells of the largest free component, lo..hi m apart."""
-    free = cm.costs < INSCRIBED
-    lab, _ = ndimage.label(free)   # 4-connected: the planner forbids diagonal squeezes between blocked cells
-    big = np.bincount(lab.ravel())[1:].argmax() + 1
-    cells = np.argwhere(lab == big)
-    pairs: list[tuple[Cell, Cell]] = []
-    while len(pairs) < n:
-        a, b = cells[rng.integers(len(cells))], cells[rng.integers(len(cells))]
-        if lo <= math.hypot(*(a - b)) * RES <= hi:
-            pairs.append(((int(a[0]), int(a[1])), (int(b[0]), int(b[1]))))
-    return pairs
-
-
-def world(cm: Costmap, cell: Cell) -> tuple[float, float]:
-    x, y = cm.cell_to_world(cell[1], cell[0])
-    return float(x), float(y)
+DEFAULT_WIDTH = PlannerConfig().bucket_width
 
 
 def path_cost(costs: np.ndarray, table: np.ndarray, path: np.ndarray) -> float:
@@ -137,7 +95,9 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     """Each pair: our plan, then the peer's, timed back to back (the machine's load hits both alike)."""
     table = planner.traversal_table()
     ours, theirs, expansions, ratio, fails, peer_fails, cheaper, squeezes = [], [], [], [], 0, 0, 0, 0
-    ours_cpu, theirs_cpu = [], []
+    ours_cpu, theirs_cpu, ref_ms, costlier = [], [], [], 0
+    esc_r2 = (planner.cfg.escape_radius / RES) ** 2
+    esc_cost = 1.0 + planner.cfg.cost_travel_multiplier * 2.0
     for s, g in pairs:
         t0, c0 = time.perf_counter(), time.thread_time()
         r = planner.plan(cm, world(cm, s), world(cm, g))
@@ -145,6 +105,10 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
         ours_cpu.append((time.thread_time() - c0) * 1e3)
         expansions.append(r.expansions)
         fails += not r.ok
+        t0 = time.perf_counter()
+        ref = reference_plan(cm.costs, table, s, g, esc_r2, esc_cost)
+        ref_ms.append((time.perf_counter() - t0) * 1e3)
+        costlier += (not r.ok and math.isfinite(ref.cost)) or (r.ok and r.cost > ref.cost * (1 + 1e-5))
         if peer is None:
             continue
         t0, c0 = time.perf_counter(), time.thread_time()
@@ -161,7 +125,8 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
             ratio.append(pc / r.cost)
             cheaper += pc < r.cost * (1 - 1e-5)
     row: dict = {"ours_ms": stats(ours), "ours_cpu_ms": stats(ours_cpu),
-                 "expansions_median": int(np.median(expansions)), "failures": fails}
+                 "expansions_median": int(np.median(expansions)), "failures": fails,
+                 "reference_ms": stats(ref_ms), "costlier_than_reference": int(costlier)}
     if peer is not None:
         row.update({"peer_ms": stats(theirs), "peer_cpu_ms": stats(theirs_cpu), "peer_failures": peer_fails,
                     "ours_over_peer_cpu_median": round(row["ours_cpu_ms"]["median"] / stats(theirs_cpu)["median"], 3),
@@ -173,44 +138,34 @@ def run_setting(cm: Costmap, planner: GlobalPlanner, peer: Peer | None, pairs: l
     return row
 
 
-Variant = tuple[str, float]     # (cost-optimal kernel, bucket width)
+def ab_variants(width_b: float) -> dict[str, float]:
+    """The two bucket widths ``--ab-width`` compares, the reference (the ratios' denominator) last."""
+    return {f"width {DEFAULT_WIDTH:g}": DEFAULT_WIDTH, f"width {width_b:g}": width_b}
 
 
-def ab_variants(width_b: float | None) -> dict[str, Variant]:
-    """The two configurations ``--ab`` compares, the reference (the ratios' denominator) last: the two kernels at
-    the default bucket width, or with ``--ab-width`` the default kernel at the default width and at that one."""
-    kernel, width = planner_module.DEFAULT_KERNEL, DEFAULT_WIDTH
-    if width_b is None:
-        return {k: (k, width) for k in KERNELS}
-    return {f"width {width:g}": (kernel, width), f"width {width_b:g}": (kernel, width_b)}
-
-
-def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]], variants: dict[str, Variant]) -> dict:
+def run_ab(cm: Costmap, planner: GlobalPlanner, pairs: list[tuple[Cell, Cell]], variants: dict[str, float]) -> dict:
     """Each pair planned by both variants back to back, alternating which goes first."""
     names = list(variants)
     ref = names[-1]
     cpu: dict[str, list[float]] = {k: [] for k in names}
     pops: dict[str, list[int]] = {k: [] for k in names}
-    scanned: dict[str, list[int]] = {k: [] for k in names}
     ratio: dict[str, list[float]] = {k: [] for k in names}
     cost_mismatch = 0
     for i, (s, g) in enumerate(pairs):
         costs = {}
         for name in names if i % 2 == 0 else names[::-1]:
-            planner.kernel, planner_module.BUCKET_WIDTH = variants[name]
+            planner.cfg.bucket_width = variants[name]
             c0 = time.thread_time()
             r = planner.plan(cm, world(cm, s), world(cm, g))
             cpu[name].append((time.thread_time() - c0) * 1e3)
             pops[name].append(r.expansions)
-            scanned[name].append(planner.scanned)
             costs[name] = r.cost if r.ok else math.inf
         for k in names:
             ratio[k].append(cpu[k][-1] / max(cpu[ref][-1], 1e-6))
         # float32 g: on 60-95 m paths the kernels report the same path's cost up to ~1e-5 apart (seen: 1.1e-5)
         cost_mismatch += any(not math.isclose(costs[k], costs[ref], rel_tol=5e-5) for k in names)
-    planner.kernel, planner_module.BUCKET_WIDTH = planner_module.DEFAULT_KERNEL, DEFAULT_WIDTH
+    planner.cfg.bucket_width = DEFAULT_WIDTH
     row: dict = {k: {"cpu_ms": stats(cpu[k]), "pops_median": int(np.median(pops[k])),
-                     "scanned_median": int(np.median(scanned[k])),
                      "cpu_over_reference_median_of_paired_ratios": round(float(np.median(ratio[k])), 3)}
                  for k in names}
     row["reference"] = ref
@@ -253,21 +208,13 @@ def parse_args() -> argparse.Namespace:
     ap.add_argument("--densities", type=float, nargs="+", default=[0.10, 0.15, 0.20])
     ap.add_argument("--settings", nargs="+", default=list(SETTINGS), choices=list(SETTINGS))
     ap.add_argument("--no-peer", action="store_true", help="skip pyastar2d")
-    ap.add_argument("--ab", action="store_true", help="paired A/B of the cost-optimal kernels (chains vs buckets)")
     ap.add_argument("--ab-width", type=float, metavar="W",
-                    help="paired A/B of the default kernel at the default bucket width vs at W (implies --ab)")
-    ap.add_argument("--chain-cap", type=int, help="override planner.CHAIN_CAP (experiments)")
-    ap.add_argument("--chain-reach", type=float, help="override planner.CHAIN_REACH (experiments)")
+                    help="paired A/B of the default bucket width vs W (no peer, no controller)")
     args = ap.parse_args()
-    if args.chain_cap is not None:
-        planner_module.CHAIN_CAP = args.chain_cap
-    if args.chain_reach is not None:
-        planner_module.CHAIN_REACH = args.chain_reach
-    if args.ab_width is not None:
+    args.ab = args.ab_width is not None
+    if args.ab:
         if not args.ab_width > 0:
             ap.error(f"--ab-width must be > 0, got {args.ab_width}")
-        args.ab = True
-    if args.ab:
         args.no_peer = True
     return args
 
@@ -282,7 +229,7 @@ def main() -> None:
         use_peer = False
     fp = load_footprint()
     planner = GlobalPlanner(PlannerConfig(heuristic_weight=args.weight))
-    variants = ab_variants(args.ab_width)
+    variants = ab_variants(args.ab_width) if args.ab else {}
     results: dict = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
                      "load_avg_at_start": os.getloadavg()[0], "pairs": args.pairs, "size": args.size,
                      "resolution": RES, "peer": "pyastar2d" if use_peer else None,
@@ -291,14 +238,12 @@ def main() -> None:
                      "settings_m": {k: list(SETTINGS[k]) for k in args.settings}, "densities": {},
                      "bucket_width": DEFAULT_WIDTH}
     if args.ab:
-        results["ab_variants"] = {k: {"kernel": v[0], "bucket_width": v[1]} for k, v in variants.items()}
+        results["ab_variants"] = variants
     t_compile = time.perf_counter()
     warm = Costmap(CostmapConfig(obstacle_layer=False, footprint=fp))
     warm.set_static_map(GridMap(np.zeros((50, 50), np.int8), RES))
-    for kernel in KERNELS:       # both cost-optimal kernels, so neither pays its compile in the first pair
-        planner.kernel = kernel
-        planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
-    planner.kernel = planner_module.DEFAULT_KERNEL
+    planner.plan(warm, (0.3, 0.3), (2.0, 2.0))
+    reference_plan(warm.costs, planner.traversal_table(), (5, 5), (40, 40))
     results["first_call_s"] = round(time.perf_counter() - t_compile, 3)
     print(f"numba first call (cache load/compile): {results['first_call_s']:.2f} s")
     ctrl_times: list[float] = []
@@ -319,14 +264,15 @@ def main() -> None:
                 print(f"density {row['obstacle_density']:.2f} {name:4s}: " + " | ".join(
                     f"{k} CPU ms median {r[k]['cpu_ms']['median']:.2f} p95 {r[k]['cpu_ms']['p95']:.2f} "
                     f"(x{r[k]['cpu_over_reference_median_of_paired_ratios']} {r['reference']}, paired), pops "
-                    f"{r[k]['pops_median']}, scanned {r[k]['scanned_median']}" for k in variants)
+                    f"{r[k]['pops_median']}" for k in variants)
                     + f" | cost mismatches {r['cost_mismatches']}", flush=True)
                 continue
             r = row[name] = run_setting(cm, planner, peer, pairs)
             line = (f"density {row['obstacle_density']:.2f} {name:4s}: ours median {r['ours_ms']['median']:.1f} ms, "
                     f"p95 {r['ours_ms']['p95']:.1f}, max {r['ours_ms']['max']:.1f} "
                     f"(CPU median {r['ours_cpu_ms']['median']:.1f}, p95 {r['ours_cpu_ms']['p95']:.1f}; "
-                    f"{r['expansions_median']} expansions median, {r['failures']} failures)")
+                    f"{r['expansions_median']} expansions median, {r['failures']} failures) | reference A* median "
+                    f"{r['reference_ms']['median']:.0f} ms, ours costlier on {r['costlier_than_reference']} pairs")
             if peer is not None:
                 line += (f" | pyastar2d median {r['peer_ms']['median']:.1f} ms, p95 {r['peer_ms']['p95']:.1f}, "
                          f"max {r['peer_ms']['max']:.1f} (CPU median {r['peer_cpu_ms']['median']:.1f}, "

@@ -37,7 +37,6 @@ import heapq
 import json
 import math
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -45,11 +44,7 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import planner_bench as pb  # the bench's maps and pairs
-
+import robonix_eval.planner_maps as pb  # the bench's maps and pairs
 from nav2_wrapper.core import Costmap, CostmapConfig, GlobalPlanner, PlannerConfig
 from nav2_wrapper.core.costs import LETHAL, inflation_cost
 from nav2_wrapper.robot_io import load_footprint

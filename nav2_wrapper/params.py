@@ -296,8 +296,16 @@ def _planner_server(rd: _Reader, into: Fields) -> None:
     raw, path = rd.node("planner_server")
     v = rd.read(ps.PLANNER_SERVER, raw, path, into)
     name = rd.only(v["planner_plugins"], f"{path}.planner_plugins")
+    chosen = raw.get(name, {}).get("plugin") if isinstance(raw.get(name), dict) else None
+    if chosen in ps.REFUSED_PLANNERS:
+        raise rd.fail(f"{path}.{name}.plugin", ps.REFUSED_PLANNERS[chosen])
     sec, table = rd.plugin(raw, path, name, _plugins_for(ps.PLANNER), "planner")
     rd.read(table, sec, f"{path}.{name}", into)
+    style = ps.PLANNER_PATH_STYLE[sec["plugin"]]
+    if style is not None:
+        if "smooth_path" in sec and sec["smooth_path"] != style:
+            rd.warn(f"{path}.{name}.smooth_path", f"is set by the plugin {sec['plugin']} to {str(style).lower()}")
+        into.setdefault(PlannerConfig, {})["smooth_path"] = style
     rd.unselected(raw, path, {name})
 
 

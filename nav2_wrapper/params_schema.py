@@ -102,13 +102,27 @@ PLANNER_SERVER = Section("planner_server", (
     own("planner_plugins", list[str], ["GridBased"], "the planner's section name (exactly one)"),
 ), nested=True)
 
-PLANNER_PLUGINS = ("robonix_nav/CostAwareAStar", "nav2_navfn_planner/NavfnPlanner",
-                   "nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStarPlanner")
+#: Planner plugin names and what each one fixes: the path style (``smooth_path``; None: the key decides). All
+#: run the one cost-aware 8-connected A*; they differ in what is returned.
+PLANNER_PATH_STYLE: dict[str, bool | None] = {
+    "robonix_nav/CostAwareAStar": None,                      # smooth_path decides (default: shortcut)
+    "nav2_smac_planner/SmacPlanner2D": False,                # the 8-connected grid path, as Smac 2D returns it
+    "nav2_theta_star_planner/ThetaStarPlanner": True,        # any-angle: line-of-sight shortcuts, Theta*-style
+}
+PLANNER_PLUGINS = tuple(PLANNER_PATH_STYLE)
+#: Nav2 planner names we do not provide, with what to use instead.
+REFUSED_PLANNERS = {
+    "nav2_navfn_planner/NavfnPlanner": "NavFn (a navigation-function wavefront with gradient descent) is not "
+    "provided; use robonix_nav/CostAwareAStar (cost-aware A*, shortcut path), nav2_smac_planner/SmacPlanner2D "
+    "(the same A*, 8-connected grid path) or nav2_theta_star_planner/ThetaStarPlanner (any-angle path)",
+}
 PLANNER = Section("planner_server.<planner>", (
     _plugin(), *core_all(PlannerConfig),
     *(core(Se2PlannerConfig, n, key=f"se2_{n}") for n in declared(Se2PlannerConfig)),
-), PLANNER_PLUGINS, doc="Every listed plugin name runs the same cost-aware A* (names kept for Nav2 profiles); "
-                        "the se2_* keys set its footprint-aware (x, y, heading) fallback.")
+), PLANNER_PLUGINS, doc="One cost-aware 8-connected A*; the plugin name picks the path it returns: "
+                        "SmacPlanner2D the 8-connected grid path, ThetaStarPlanner an any-angle path "
+                        "(line-of-sight shortcuts), CostAwareAStar as `smooth_path` says (NavfnPlanner is "
+                        "refused). The se2_* keys set its footprint-aware (x, y, heading) fallback.")
 
 CONTROLLER_SERVER = Section("controller_server", (
     _sim_time(),

@@ -152,25 +152,31 @@ class HolonomicController:
         if self.path_headings is not None and len(self.path_headings) != len(self.path):
             raise ValueError(f"{len(self.path_headings)} headings for {len(self.path)} path points")
         seg = np.hypot(*np.diff(self.path, axis=0).T) if len(self.path) > 1 else np.zeros(0)
-        self._cum = np.concatenate([[0.0], np.cumsum(seg)])
-        self._idx = -1
+        self.path_cum: NDArray[np.float64] = np.concatenate([[0.0], np.cumsum(seg)])   # length along path (m)
+        self.progress_index = -1     # path point nearest the base at the last step (-1: not yet known)
+
+    def index_ahead(self, i: int, distance: float) -> int:
+        """The first path index at least ``distance`` metres along the path past index ``i`` (clamped to the
+        path's last point); the shared way other components look ahead along the followed path."""
+        return min(len(self.path) - 1, int(np.searchsorted(self.path_cum, self.path_cum[i] + distance)))
 
     def _closest(self, x: float, y: float) -> int:
         """Nearest path index, searched forward from the last one (so loops in the path don't confuse it)."""
-        if self._idx < 0:
+        if self.progress_index < 0:
             lo, hi = 0, len(self.path)
         else:
-            lo = self._idx
-            hi = int(np.searchsorted(self._cum, self._cum[lo] + 2.0)) + 1
+            lo = self.progress_index
+            hi = int(np.searchsorted(self.path_cum, self.path_cum[lo] + 2.0)) + 1
         d = np.hypot(self.path[lo:hi, 0] - x, self.path[lo:hi, 1] - y)
-        self._idx = lo + int(np.argmin(d))
-        return self._idx
+        self.progress_index = lo + int(np.argmin(d))
+        return self.progress_index
 
     def remaining(self, pose: Pose2D) -> float:
         if len(self.path) == 0:
             return 0.0
         i = self._closest(pose[0], pose[1])
-        return float(self._cum[-1] - self._cum[i] + math.hypot(self.path[i, 0] - pose[0], self.path[i, 1] - pose[1]))
+        return float(self.path_cum[-1] - self.path_cum[i]
+                     + math.hypot(self.path[i, 0] - pose[0], self.path[i, 1] - pose[1]))
 
     def compute(self, pose: Pose2D, vel: tuple[float, float, float],
                 goal: Pose2D, costmap: Costmap, dt: float, xy_reached: bool = False) -> ControlOutput:
@@ -247,10 +253,10 @@ class HolonomicController:
         """Direction of the path over ``span`` m ending at index j (or, ahead=True, starting at j)."""
         j = min(max(j, 0), len(self.path) - 1)
         if ahead:
-            k = min(int(np.searchsorted(self._cum, self._cum[j] + span)), len(self.path) - 1)
+            k = min(int(np.searchsorted(self.path_cum, self.path_cum[j] + span)), len(self.path) - 1)
             seg = self.path[k] - self.path[j]
         else:
-            k = max(int(np.searchsorted(self._cum, self._cum[j] - span)) - 1, 0)
+            k = max(int(np.searchsorted(self.path_cum, self.path_cum[j] - span)) - 1, 0)
             seg = self.path[j] - self.path[k]
         return math.atan2(seg[1], seg[0]) if float(np.hypot(*seg)) > 1e-6 else default
 
@@ -275,7 +281,7 @@ class HolonomicController:
         body off the passage's sides; holding it until the passage is behind is what gets a 0.5 m wide robot
         through a 0.8 m gap or a doorway entered at an angle. None in open space."""
         c = self.cfg
-        k = int(np.searchsorted(self._cum, self._cum[i] + c.passage_lookahead)) + 1
+        k = int(np.searchsorted(self.path_cum, self.path_cum[i] + c.passage_lookahead)) + 1
         pts = self.path[i:k]
         cost = costmap.cost_at(pts[:, 0], pts[:, 1], outside=0).astype(int)
         cost[cost == NO_INFORMATION] = 0
@@ -284,7 +290,7 @@ class HolonomicController:
                                    costmap.cfg.cost_scaling_factor)
         if clear >= c.footprint.circumscribed_radius + c.tight_clearance:
             return None
-        tangent = self._path_yaw(max(int(np.searchsorted(self._cum, self._cum[i + j] - self._half_length)), 0),
+        tangent = self._path_yaw(max(int(np.searchsorted(self.path_cum, self.path_cum[i + j] - self._half_length)), 0),
                                  2 * self._half_length, th, ahead=True)
         yaws = tangent + np.radians(np.arange(-90.0, 91.0, 10.0))  # holonomic: may cross a passage sideways
         return float(yaws[self._rank_passage_yaws(yaws, tangent, pts[j], costmap)[0]])

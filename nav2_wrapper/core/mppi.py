@@ -22,12 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from robonix_common.geometry import Pose2D, wrap_angle
+from robonix_common.geometry import Pose2D
 from robonix_common.params import param
 
 from .controller import ControllerConfig, ControlOutput, HolonomicController
 from .costmap import Costmap
-from .costs import INSCRIBED, LETHAL, NO_INFORMATION
+from .critics import CriticInput, build_critics
+from .interfaces import Critic
 
 
 @dataclass
@@ -74,19 +75,19 @@ class MppiController(HolonomicController):
     """Drop-in replacement for :class:`HolonomicController` that chooses commands by MPPI."""
 
     def __init__(self, cfg: ControllerConfig | None = None, mppi: MppiConfig | None = None) -> None:
-        super().__init__(cfg)
         self.mppi = mppi or MppiConfig()
         m = self.mppi
+        self._u = np.zeros((m.time_steps, 3))      # before the base class sets the first (empty) path
+        super().__init__(cfg)
         self._rng = np.random.default_rng(m.seed)
-        self._u = np.zeros((m.time_steps, 3))
         self._sample_points = self.cfg.footprint.outline_points(m.outline_spacing)
         self._margin_points = self.cfg.footprint.padded(m.clearance_margin).outline_points(m.outline_spacing)
+        self.critics: list[Critic] = build_critics(m, self._sample_points, self._margin_points)
         self.last_samples: NDArray[np.float64] | None = None   # (K, T, 3) poses of the last step, for display
 
     def set_path(self, path: NDArray[np.float64], headings: NDArray[np.float64] | None = None) -> None:
         super().set_path(path, headings)
-        if hasattr(self, "_u"):
-            self._u[:] = 0.0
+        self._u[:] = 0.0
 
     def _compute(self, pose: Pose2D, vel: Pose2D, goal: Pose2D, costmap: Costmap, dt: float,
                  xy_reached: bool = False) -> ControlOutput:
@@ -173,127 +174,13 @@ class MppiController(HolonomicController):
         self._u = np.vstack([self._u[1:], self._u[-1:]])   # warm start: shift by one step
         return float(cmd[0]), float(cmd[1]), float(cmd[2])
 
-    # ---- critics -----------------------------------------------------------------------------------------
     def _score(self, pose: Pose2D, goal: Pose2D, costmap: Costmap, traj: NDArray[np.float64],
                u: NDArray[np.float64], i: int, target: float, heading_gain: float = 1.0) -> NDArray[np.float64]:
-        cr = self.mppi
+        """Sum of the critics' costs (``critics``, built from the config) for the K sampled trajectories."""
+        m, c = self.mppi, self.cfg
+        inp = CriticInput(pose, goal, costmap, traj, u, self.path, self.path_cum, i,
+                          m.time_steps * m.model_dt * c.desired_linear_vel * self.speed_limit, target, heading_gain)
         cost = np.zeros(len(traj))
-        hits, close = self._collisions(pose, traj, costmap)
-        cost += cr.collision_cost * hits + cr.clearance_weight * close
-        cost += cr.cost_weight * self._centre_costs(traj, costmap)
-        dgoal = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
-        if dgoal < cr.goal_distance:
-            cost += cr.goal_weight * np.hypot(traj[..., 0] - goal[0], traj[..., 1] - goal[1]).mean(axis=1)
-        else:
-            cost += self._path_costs(traj, i, costmap)
-        dyaw = np.abs(wrap_angle(traj[..., 2] - target))
-        cost += cr.heading_weight * heading_gain * dyaw.mean(axis=1)
-        cost += cr.twirling_weight * np.mean(u[..., 2] ** 2, axis=1)
-        cost += cr.smoothness_weight * np.mean(np.diff(u, axis=1) ** 2, axis=(1, 2))
+        for critic in self.critics:
+            cost += critic.score(inp)
         return cost
-
-    def _collisions(self, pose: Pose2D, traj: NDArray[np.float64],
-                    costmap: Costmap) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Per trajectory: 1 if its sampled footprint outline touches a lethal cell the robot does not already
-        touch (those are forgiven, as in the pursuit's check), else 0; and the share of its checked poses at
-        which the footprint grown by ``clearance_margin`` touches one.
-
-        Why the second: the centre's cost cannot tell a body lined up with a doorway from one entering it
-        skewed (same centre, corners 10 cm nearer the jambs), and a collision test with no margin lets the
-        corners graze. A margin band rather than the inscribed-cost share of the outline: in a 0.8 m gap the
-        whole 0.5 m body is within the inscribed radius of both posts, so a share of inscribed cells charges
-        every way through and the robot stalls; the margin band is empty there and charges only real near
-        misses. It is a preference, bounded by its weight, never a ban.
-
-        Off by default, because the trade-off measured so far goes the wrong way in dense clutter. At weight 20,
-        in-process on the four built-in scenes (nominal and noisy lidar) the closest approach went from 5.0 to
-        9.0 cm and 40/40 stayed 40/40; the 0.8 m gap beside a dropped box from 3.5 to 6.2–7.9 cm. But on the
-        clutter worlds whose passages have only the proof's 5 cm, forward samples through them are all charged,
-        stopping is not, and the robot stalled: clutter worlds 2, 8 and 14 went from 6/6 to 3/6 (weight 8 too, and
-        with the critic off on heading-planned SE(2) paths); charged relative to the best sample going forward,
-        1/6."""
-        m = self.mppi
-        stride = max(1, m.collision_stride)
-        sub = traj[:, stride - 1::stride]
-        k, t = sub.shape[:2]
-        poses = sub.reshape(-1, 3)
-        centre = costmap.cost_at(poses[:, 0], poses[:, 1], outside=0)
-        known = centre != NO_INFORMATION
-        close = np.zeros(len(poses), dtype=bool)
-        if m.clearance_weight > 0 and m.clearance_margin > 0:
-            band = (centre >= self._possible_collision_cost(costmap, m.clearance_margin)) & known
-            if band.any():
-                close[band] = (costmap.footprint_costs(poses[band], self._margin_points, outside=0) == LETHAL).any(
-                    axis=1)
-        near = (centre >= self._possible_collision_cost(costmap)) & known
-        hit = np.zeros(len(poses), dtype=bool)
-        if near.any():
-            fc = costmap.footprint_costs(poses[near], self._sample_points, outside=0)
-            lethal = fc == LETHAL
-            if lethal.any():
-                start = costmap.footprint_costs(np.array([pose], dtype=float), self._sample_points, outside=0)
-                if (start == LETHAL).any():   # already touching: count only clearly deeper contacts
-                    lethal &= (costmap.cost_at(poses[near, 0], poses[near, 1], outside=0) >= INSCRIBED)[:, None]
-            hit[near] = lethal.any(axis=1)
-        return hit.reshape(k, t).any(axis=1).astype(float), close.reshape(k, t).mean(axis=1)
-
-    def _possible_collision_cost(self, costmap: Costmap, grow: float = 0.0) -> int:
-        """Centre cost below which no point of the footprint grown by ``grow`` can touch a lethal cell (the
-        circumscribed radius plus ``grow``; 1 if that lies beyond the inflation, where the cost says nothing)."""
-        from .costs import inflation_cost
-
-        fp = costmap.cfg.footprint
-        reach = fp.circumscribed_radius + grow
-        if reach >= costmap.cfg.inflation_radius:
-            return 1
-        val = int(inflation_cost(reach, fp.inscribed_radius, costmap.cfg.inflation_radius,
-                                 costmap.cfg.cost_scaling_factor))
-        return max(1, val)
-
-    def _centre_costs(self, traj: NDArray[np.float64], costmap: Costmap) -> NDArray[np.float64]:
-        c = costmap.cost_at(traj[..., 0], traj[..., 1], outside=0).astype(float)
-        c[c == NO_INFORMATION] = 0.0
-        return np.minimum(c, INSCRIBED).mean(axis=1) / INSCRIBED
-
-    def _path_costs(self, traj: NDArray[np.float64], i: int, costmap: Costmap) -> NDArray[np.float64]:
-        """Follow (end point toward the point the horizon should reach), align (stay near the path) and
-        progress (arc length gained), all against the path ahead of the robot.
-
-        The path ahead is rasterised on the local costmap's grid and a distance transform gives, for every
-        cell, the distance to the path and the arc length of its nearest path point: each trajectory pose is
-        then two array lookups, whatever the number of samples."""
-        cr, m, c = self.mppi, self.mppi, self.cfg
-        horizon = m.time_steps * m.model_dt * c.desired_linear_vel * self.speed_limit
-        j_end = int(np.searchsorted(self._cum, self._cum[i] + horizon + 0.5)) + 1
-        ahead = self.path[i:j_end]
-        cum = self._cum[i:j_end] - self._cum[i]
-        dist, arc = self._path_field(ahead, cum, costmap)
-        col, row = costmap.world_to_cell(traj[..., 0], traj[..., 1])
-        rows, cols = dist.shape
-        np.clip(col, 0, cols - 1, out=col)
-        np.clip(row, 0, rows - 1, out=row)
-        align = dist[row, col].mean(axis=1)
-        gained = arc[row[:, -1], col[:, -1]]
-        j_goal = int(np.searchsorted(cum, min(horizon, float(cum[-1]))))
-        aim = ahead[min(j_goal, len(ahead) - 1)]
-        follow = np.hypot(traj[:, -1, 0] - aim[0], traj[:, -1, 1] - aim[1])
-        return cr.path_follow_weight * follow + cr.path_align_weight * align - cr.progress_weight * gained
-
-    @staticmethod
-    def _path_field(ahead: NDArray[np.float64], cum: NDArray[np.float64],
-                    costmap: Costmap) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Per local-costmap cell: metres to the nearest point of ``ahead`` and that point's arc length."""
-        from scipy.ndimage import distance_transform_edt
-
-        rows, cols = costmap.shape
-        col, row = costmap.world_to_cell(ahead[:, 0], ahead[:, 1])
-        inside = (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
-        arc_at = np.zeros((rows, cols))
-        seed = np.ones((rows, cols), dtype=bool)
-        if not inside.any():   # path ahead entirely off the local window: only its first point matters
-            col, row = np.clip(col[:1], 0, cols - 1), np.clip(row[:1], 0, rows - 1)
-            inside = np.ones(1, dtype=bool)
-        seed[row[inside], col[inside]] = False
-        arc_at[row[inside][::-1], col[inside][::-1]] = cum[inside][::-1]   # first visit wins on repeats
-        dist, (ir, ic) = distance_transform_edt(seed, return_indices=True)
-        return dist * costmap.resolution, arc_at[ir, ic]

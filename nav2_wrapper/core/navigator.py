@@ -367,9 +367,8 @@ class Navigator:
         p = self.controller.path
         if len(p) == 0:
             return False
-        i = max(self.controller._idx, 0)
-        ahead = self.controller._cum[i] + self.cfg.navigator.path_blocked_lookahead
-        j = int(np.searchsorted(self.controller._cum, ahead))
+        i = max(self.controller.progress_index, 0)
+        j = self.controller.index_ahead(i, self.cfg.navigator.path_blocked_lookahead)
         seg = p[i:j + 1]
         far = np.hypot(seg[:, 0] - pose[0], seg[:, 1] - pose[1]) > self.cfg.planner.escape_radius
         seg = seg[far]
@@ -386,7 +385,7 @@ class Navigator:
         if len(p) == 0 or math.hypot(vel[0], vel[1]) >= self.cfg.progress_checker.blocked_speed:
             return False
         i = int(np.argmin(np.hypot(p[:, 0] - pose[0], p[:, 1] - pose[1])))
-        j = min(len(p) - 1, int(np.searchsorted(self.controller._cum, self.controller._cum[i] + 0.5)))
+        j = self.controller.index_ahead(i, 0.5)
         rc = self.cfg.recovery
         obs = esc.gather_obstacles(self.local_costmap, pose[0], pose[1], rc.escape_reach, self._scan_pts)
         return esc.blocked_toward(self.cfg.controller.footprint.polygon, pose, obs,

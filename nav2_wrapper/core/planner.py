@@ -14,31 +14,12 @@ from numpy.typing import NDArray
 
 from robonix_common.params import param
 
-from . import _chain, _search
+from . import _search
 from .costmap import Costmap
 from .costs import INSCRIBED, LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
 from .se2_planner import Se2PlannerConfig
 
-# f range of one bucket of the cost-optimal search's queue (cells × traversal factor). Buckets are popped last in,
-# first out (the tie-break among equal f, see _search.astar_buckets). Before the chained kernel, 1/16 measured best
-# (7-17 % faster than 1.0 with FIFO; 1/32 and 1/64 no better). With it, wider buckets are slightly faster: median
-# paired time ratio of 1/2 to 1/16 over the six bench settings 0.94-0.97 (100 pairs each) and 0.97-1.00
-# (`planner_bench.py --ab-width 0.0625 --pairs 40`), both on a machine loaded by a test run; 1/4 and 1.0 within 2 %
-# of 1/2; the bucket kernel level (0.97-0.99). The same costs on every pair.
-BUCKET_WIDTH = 1.0 / 2
-# The cost-optimal kernel: "chains" expands uniform cost-0 cells by scans (_chain), "buckets" puts every cell
-# through the queue (_search.astar_buckets). Same cost; see the README's planner section for the measured A/B.
-DEFAULT_KERNEL = "chains"
-KERNELS = ("chains", "buckets")
-# Longest scan (cells) before a cell is filed anyway, and how far past the scanning cell's f a scan goes before
-# it files the cell it is on (a scan away from the goal raises f by up to 2 per cell: without this it runs
-# into regions the search never reaches). Both bound how far one entry's f rises, which sizes the bucket ring.
-# Median paired CPU ratio vs buckets over the six settings, 40 pairs each (`planner_bench.py --ab --chain-cap C
-# --chain-reach R`, one run each on a loaded machine, noise ~±5 %): with the first pass rule (whole 3×3 cost 0)
-# 32/16 0.68-0.93, 64/16 0.67-0.93, 32/8 0.69-0.95, 16/4 0.73-0.99; with the current one 32/16 0.66-0.95,
-# 32/8 0.71-0.88, 16/16 0.71-0.88, 32/32 0.69-0.91: no clear winner, 32/16 kept.
-CHAIN_CAP = 32
-CHAIN_REACH = 16.0
+SQRT2 = math.sqrt(2.0)
 
 
 @dataclass
@@ -56,8 +37,10 @@ class PlannerConfig:
     escape_radius: float = param(0.35, "how far a start inside the inscribed band may move through it", unit="m",
                                  ge=0)
     heuristic_weight: float = param(
-        1.25, "weighted A*: path cost <= weight * optimal (1.25: measured median 1.03-1.06, ~5x fewer expansions)",
-        ge=1.0)
+        1.0, "weighted A*: path cost <= weight * optimal (1: cost-optimal, what every robot profile uses)", ge=1.0)
+    bucket_width: float = param(
+        0.5, "f range of one bucket of the search's queue (cells x traversal factor); the path cost is exact "
+             "whatever the width, only the speed changes", gt=0, le=16.0)
     se2: Se2PlannerConfig = field(default_factory=Se2PlannerConfig)   # the footprint-aware fallback (se2_* keys)
 
 
@@ -70,33 +53,7 @@ class PlanResult:
     length: float = 0.0                 # m, of the returned path
     expansions: int = 0
     headings: NDArray[np.float64] | None = None   # per path point (rad): set when the SE(2) fallback planned it
-
-
-class _Search:
-    """One plan's search inputs, shared by the kernels it calls."""
-
-    def __init__(self, costs: NDArray[np.uint8], table: NDArray[np.float64], start: int, rec: NDArray[np.int32],
-                 escape_cells: float, esc_cost: float) -> None:
-        self.costs, self.table, self.start, self.rec = costs, table, start, rec
-        self.esc_r2, self.esc_cost = escape_cells * escape_cells, esc_cost
-        self.h_scale = min(float(np.min(table)), esc_cost)   # the cheapest move per unit length keeps h admissible
-
-    def max_factor(self) -> float:
-        """The dearest traversal factor a move can enter (escape cells included)."""
-        finite = self.table[np.isfinite(self.table)]
-        return max(float(finite.max()) if len(finite) else 1.0, self.esc_cost)
-
-    def ring_size(self, width: float, rise: float = 0.0) -> int:
-        """Buckets the bucket queue needs: one move raises f by at most the longest step plus √2·h_scale, one
-        filed scan end by at most ``rise``."""
-        step = math.sqrt(2.0) * (self.max_factor() + self.h_scale)
-        return 1 << max(3, int(math.ceil(math.log2(max(step, rise) / width + 3))))
-
-    def forward_path(self, stamp: int, cell: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Cells from the start to ``cell`` through the forward search's closed cells, and g along them."""
-        cells = _search.backtrack(self.costs, self.table, self.rec, stamp, self.start, cell, self.esc_r2,
-                                  self.esc_cost)
-        return cells, self.rec.view(np.float32)[2 * cells + 1].astype(np.float64)
+    cells: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 2), np.int64))  # grid path (row, col)
 
 
 class GlobalPlanner:
@@ -106,8 +63,6 @@ class GlobalPlanner:
         self.cfg = cfg or PlannerConfig()
         self._size = 0
         self._stamp = 0
-        self.kernel = DEFAULT_KERNEL        # the cost-optimal search's kernel, one of KERNELS
-        self.scanned = 0                    # cells the last chained search expanded by scans (bench figure)
 
     def traversal_table(self) -> NDArray[np.float64]:
         c = self.cfg
@@ -151,11 +106,11 @@ class GlobalPlanner:
             if len(candidates) == 0:
                 return PlanResult(False, reason=self._blocked_reason(costs[gr, gc], goal))
             target = int(candidates[0])
-        search = _Search(costs, table, s_flat, self._rec, self.cfg.escape_radius / res,
-                         1.0 + self.cfg.cost_travel_multiplier * 2.0)
-        cells, gvals, expansions = self._search(search, target)
-        if cells is None:
-            # The failed one-sided search closed the start's whole component: take the nearest closed candidate.
+        esc_r2 = (self.cfg.escape_radius / res) ** 2
+        esc_cost = 1.0 + self.cfg.cost_travel_multiplier * 2.0
+        found, expansions = self._search(costs, table, s_flat, target, esc_r2, esc_cost)
+        if not found:
+            # The failed search closed the start's whole component: take the nearest closed candidate.
             if candidates is None:
                 candidates = self._goal_candidates(costs, table, gr, gc, res)
             reach = [int(c) for c in candidates if _search.closed(self._rec, int(c), self._stamp)]
@@ -165,8 +120,9 @@ class GlobalPlanner:
                     f"(searched {expansions} cells, tolerance {self.cfg.tolerance:.2f} m)")
                 return PlanResult(False, reason=f"no path: {why}", expansions=expansions)
             target = reach[0]
-            cells, gvals = search.forward_path(self._stamp, target)
+        cells, gvals = _search.backtrack(self._rec, cols, s_flat, target)
         total = float(gvals[-1])
+        grid_path = np.stack([cells // cols, cells % cols], axis=1)
         if self.cfg.smooth_path and len(cells) > 2:
             keep = _search.shortcut(costs, table, cells, gvals, self.cfg.smoothing_slack)
             cells = cells[keep]
@@ -177,33 +133,20 @@ class GlobalPlanner:
             pts[-1] = goal
         dense = densify(pts, res)
         length = float(np.sum(np.hypot(*np.diff(dense, axis=0).T))) if len(dense) > 1 else 0.0
-        return PlanResult(True, dense, "", total, length, expansions)
+        return PlanResult(True, dense, "", total, length, expansions, cells=grid_path)
 
-    def _search(self, search: _Search, target: int) -> tuple[NDArray | None, NDArray, int]:
-        """(cells start..target, g along them, expansions), or cells None when the target is unreachable
-        (then every cell reachable from the start is closed)."""
-        self.scanned = 0
-        if self.kernel not in KERNELS:
-            raise ValueError(f"unknown planner kernel {self.kernel!r} (one of {KERNELS})")
-        if self.cfg.heuristic_weight == 1.0 and self.kernel == "chains":
-            found, expansions, self.scanned = _chain.astar_chains(
-                search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
-                search.esc_cost, search.h_scale, BUCKET_WIDTH,
-                search.ring_size(BUCKET_WIDTH, _chain.chain_rise(CHAIN_CAP, CHAIN_REACH, search.max_factor(),
-                                                                 search.h_scale)),
-                CHAIN_CAP, CHAIN_REACH)
-        elif self.cfg.heuristic_weight == 1.0:
-            found, expansions = _search.astar_buckets(
-                search.costs, search.table, search.start, target, self._rec, self._stamp, search.esc_r2,
-                search.esc_cost, search.h_scale, BUCKET_WIDTH, search.ring_size(BUCKET_WIDTH))
-        else:
-            found, expansions = _search.astar(search.costs, search.table, search.start, target, self._rec,
-                                              self._stamp, search.esc_r2, search.esc_cost, self.cfg.heuristic_weight,
-                                              search.h_scale)
-        if not found:
-            return None, np.zeros(0), expansions
-        cells, gvals = search.forward_path(self._stamp, target)
-        return cells, gvals, expansions
+    def _search(self, costs: NDArray[np.uint8], table: NDArray[np.float64], start: int, target: int,
+                esc_r2: float, esc_cost: float) -> tuple[bool, int]:
+        """(found, expansions) of the search from ``start`` to ``target``; on failure every cell reachable from the
+        start is closed in the record."""
+        h_scale = min(float(np.min(table)), esc_cost)      # the cheapest move per unit length keeps h admissible
+        finite = table[np.isfinite(table)]
+        max_step = SQRT2 * max(float(finite.max()) if len(finite) else 1.0, esc_cost)
+        width = self.cfg.bucket_width
+        weight = self.cfg.heuristic_weight
+        found, expansions = _search.astar(costs, table, start, target, self._rec, self._stamp, esc_r2, esc_cost,
+                                          weight, h_scale, width, _search.ring_size(width, max_step, weight, h_scale))
+        return bool(found), int(expansions)
 
     def _goal_candidates(self, costs: NDArray[np.uint8], table: NDArray, gr: int, gc: int, res: float) -> NDArray:
         """Traversable cells within ``tolerance`` of the goal cell, nearest first (flat indices)."""

@@ -202,7 +202,7 @@ class Escape(Behavior):
         if len(p) == 0:
             return None
         i = int(np.argmin(np.hypot(p[:, 0] - pose[0], p[:, 1] - pose[1])))
-        j = min(len(p) - 1, int(np.searchsorted(ctrl._cum, ctrl._cum[i] + 0.5)))
+        j = ctrl.index_ahead(i, 0.5)
         return float(p[j, 0] - pose[0]), float(p[j, 1] - pose[1])
 
     def _choose(self, pose: Pose2D, obs: esc.Obstacles, ctrl: HolonomicController) -> esc.Choice:

@@ -288,7 +288,7 @@ class Se2Planner:
         order = np.argsort(d2[ok], kind="stable")
         return (rr[ok] * cols + cc[ok])[order].astype(np.int64)
 
-    def _extract(self, costmap: _GridFrame, win: _Window, parent: NDArray[np.int64], found: int,
+    def extract_path(self, costmap: _GridFrame, win: _Window, parent: NDArray[np.int64], found: int,
                  start: tuple[float, float, float], goal: tuple[float, float],
                  exact_goal: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """World points and headings from the start to the found state; a turn in place keeps one point
@@ -368,7 +368,7 @@ class Se2Search:
                 self.hv = np.concatenate([self.hv, np.empty_like(self.hv)])
         self.seconds += time.perf_counter() - t0
         if found >= 0:
-            path, headings = self.planner._extract(self.frame, self.win, self.parent, found, self.start, self.goal,
+            path, headings = self.planner.extract_path(self.frame, self.win, self.parent, found, self.start, self.goal,
                                                    self.exact_goal)
             length = float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(path) > 1 else 0.0
             return Se2Plan(True, path, headings, "", length, self.expansions, self.seconds)

@@ -71,3 +71,24 @@ def test_missing_scan_disables_obstacle_layer_with_warning():
     lp = load_params("sim", scan_topic="")
     assert not lp.config.global_costmap.obstacle_layer
     assert any("scan.topic" in w for w in lp.warnings)
+
+
+def _with_planner(plugin: str, smooth: str = "true") -> str:
+    text = profile_path("sim").read_text()
+    assert 'plugin: "robonix_nav/CostAwareAStar"' in text
+    assert "smooth_path: true" in text
+    text = text.replace("smooth_path: true", f"smooth_path: {smooth}", 1)
+    return text.replace('plugin: "robonix_nav/CostAwareAStar"', f'plugin: "{plugin}"', 1)
+
+
+def test_planner_plugin_names_pick_the_path_style_or_are_refused():
+    """SmacPlanner2D returns the 8-connected grid path, ThetaStarPlanner an any-angle one (whatever smooth_path
+    says, with a warning when it says otherwise); NavfnPlanner is refused naming what we provide."""
+    smac = load_params("sim", text=_with_planner("nav2_smac_planner/SmacPlanner2D"))
+    assert smac.config.planner.smooth_path is False
+    theta = load_params("sim", text=_with_planner("nav2_theta_star_planner/ThetaStarPlanner", "false"))
+    assert theta.config.planner.smooth_path is True
+    assert any("smooth_path" in w and "ThetaStarPlanner" in w for w in theta.warnings)
+    assert load_params("sim").config.planner.smooth_path is True
+    with pytest.raises(ParamsError, match="NavFn.*CostAwareAStar.*SmacPlanner2D.*ThetaStarPlanner"):
+        load_params("sim", text=_with_planner("nav2_navfn_planner/NavfnPlanner"))

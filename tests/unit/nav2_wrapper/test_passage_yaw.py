@@ -69,7 +69,7 @@ def test_a_doorway_is_crossed_lined_up_with_the_most_room(offset: float, angle: 
     yaw = ctl._passage_yaw(i, heading, cm)
     assert yaw is not None, "a 1.1 m doorway is a narrow passage for this body"
     # where it was judged: the tightest path point ahead (highest centre cost), as the controller does
-    ahead = path[i:int(np.searchsorted(ctl._cum, ctl._cum[i] + ctl.cfg.passage_lookahead)) + 1]
+    ahead = path[i:int(np.searchsorted(ctl.path_cum, ctl.path_cum[i] + ctl.cfg.passage_lookahead)) + 1]
     x, y = ahead[int(np.argmax(cm.cost_at(ahead[:, 0], ahead[:, 1], outside=0)))]
     chosen = _clearance(grid, x, y, yaw)
     best = max(_clearance(grid, x, y, CROSSING + math.radians(a)) for a in range(0, 180, 5))

@@ -1,5 +1,6 @@
-"""The cost-optimal planner (heuristic_weight 1.0) returns exactly the cheapest path: its cost equals a plain
-Dijkstra written independently here, on small random maps, including starts inside the inscribed band
+"""The cost-optimal planner (heuristic_weight 1.0) returns exactly the cheapest path: its cost equals the
+reference planner's (a textbook A*, ``nav2_wrapper.core.reference``) and its grid path costs what it reports,
+on small random maps, including starts inside the inscribed band
 (the escape disc), blocked goals (tolerance), unreachable goals and unknown regions. Its kernel is tuned for
 speed (bucket queue, stamped records, path recovered from g, moves pruned), so this is the check that none
 of that changed the answer.
@@ -7,7 +8,6 @@ of that changed the answer.
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
@@ -16,6 +16,7 @@ import pytest
 from nav2_wrapper.core import INSCRIBED, Costmap, CostmapConfig, GlobalPlanner, PlannerConfig, _search
 from nav2_wrapper.core import planner as planner_module
 from nav2_wrapper.core.costs import LETHAL, MAX_NON_OBSTACLE, NO_INFORMATION
+from nav2_wrapper.core.reference import path_cost, reference_plan
 from nav2_wrapper.robot_io import load_footprint
 from robonix_common.grid import GridMap
 
@@ -38,45 +39,18 @@ def random_costmap(rng: np.random.Generator, rows: int = 48, cols: int = 64, box
 
 def reference_cost(costs: np.ndarray, table: np.ndarray, start: tuple[int, int], goal: tuple[int, int],
                    esc_r2: float, esc_cost: float) -> float:
-    """Plain Dijkstra over 8-connected moves: entering a cell costs its traversal factor × step length;
-    blocked cells within the escape disc around the start cost ``esc_cost``; no diagonal squeeze between two
-    blocked orthogonal cells outside that disc."""
-    rows, cols = costs.shape
-    sr, sc = start
+    """The product's reference planner (plain A*, ``nav2_wrapper.core.reference``): the cheapest cost."""
+    return reference_plan(costs, table, start, goal, esc_r2, esc_cost).cost
 
-    def near(r: int, c: int) -> bool:
-        return (r - sr) ** 2 + (c - sc) ** 2 <= esc_r2
 
-    def blocked(r: int, c: int) -> bool:
-        return not math.isfinite(table[costs[r, c]])
-
-    dist = {start: 0.0}
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if (r, c) == goal:
-            return d
-        if d > dist[(r, c)]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                nr, nc = r + dr, c + dc
-                if (dr == 0 and dc == 0) or not (0 <= nr < rows and 0 <= nc < cols):
-                    continue
-                f = table[costs[nr, nc]]
-                if not math.isfinite(f):
-                    if not near(nr, nc):
-                        continue
-                    f = esc_cost
-                if dr and dc:
-                    if not near(nr, nc) and blocked(r, nc) and blocked(nr, c):
-                        continue
-                    f *= math.sqrt(2.0)
-                nd = d + f
-                if nd < dist.get((nr, nc), math.inf):
-                    dist[(nr, nc)] = nd
-                    heapq.heappush(heap, (nd, (nr, nc)))
-    return math.inf
+def assert_path_costs(cm: Costmap, planner: GlobalPlanner, got, start: np.ndarray) -> None:
+    """The planner's grid path (before shortcutting) is a legal 8-connected path whose cost is the reported one."""
+    cfg = planner.cfg
+    cells = got.cells
+    assert tuple(cells[0]) == (int(start[0]), int(start[1]))
+    cost = path_cost(cm.costs, planner.traversal_table(), cells, (cfg.escape_radius / RES) ** 2,
+                     1.0 + cfg.cost_travel_multiplier * 2.0)
+    assert cost == pytest.approx(got.cost, rel=1e-5, abs=1e-4)
 
 
 def centre(cm: Costmap, cell: np.ndarray) -> tuple[float, float]:
@@ -110,6 +84,7 @@ def test_cost_equals_plain_dijkstra_on_random_maps(seed: int, multiplier: float,
             continue          # an unreachable free goal may still be met within tolerance: not compared here
         assert got.ok, got.reason
         assert got.cost == pytest.approx(want, rel=1e-5, abs=1e-4), (seed, k, tuple(a), tuple(b))
+        assert_path_costs(cm, planner, got, a)
         checked += 1
     assert checked >= 15, (checked, unreachable)
 
@@ -299,7 +274,7 @@ def field_pairs(cm: Costmap, table: np.ndarray, rng: np.random.Generator, n: int
     return pairs
 
 
-def field_mismatches(cfg: PlannerConfig, seed: int) -> tuple[int, int]:
+def field_mismatches(cfg: PlannerConfig, seed: int, check_paths: bool = True) -> tuple[int, int]:
     """(pairs compared, pairs whose planned cost differs from plain Dijkstra) on one random cost field."""
     rng = np.random.default_rng(seed)
     cm = random_cost_field(rng)
@@ -314,6 +289,8 @@ def field_mismatches(cfg: PlannerConfig, seed: int) -> tuple[int, int]:
             continue
         got = planner.plan(cm, centre(cm, a), centre(cm, b))
         assert got.ok, got.reason
+        if check_paths:
+            assert_path_costs(cm, planner, got, a)
         checked += 1
         wrong += got.cost != pytest.approx(want, rel=1e-5, abs=1e-4)
     return checked, wrong
@@ -335,16 +312,16 @@ def test_the_comparison_catches_an_overestimating_heuristic(monkeypatch: pytest.
     """The check above has teeth: the same kernel with the heuristic 15 % too large (inadmissible) returns a
     dearer path on some of these pairs, and the comparison reports it."""
 
-    class Inflated(planner_module._Search):
-        def __init__(self, *args, **kwargs) -> None:
-            super().__init__(*args, **kwargs)
-            self.h_scale *= 1.15
+    kernel = planner_module._search.astar
 
-    monkeypatch.setattr(planner_module, "_Search", Inflated)
+    def inflated(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, weight, h_scale, *rest):
+        return kernel(costs, table, start, goal, rec, stamp, esc_r2, esc_cost, weight, h_scale * 1.15, *rest)
+
+    monkeypatch.setattr(planner_module._search, "astar", inflated)
     wrong = 0
     for seed, multiplier, unknown_cost, _ in FIELD_CASES[:4]:
         cfg = PlannerConfig(heuristic_weight=1.0, cost_travel_multiplier=multiplier, unknown_cost=unknown_cost)
-        wrong += field_mismatches(cfg, seed)[1]
+        wrong += field_mismatches(cfg, seed, check_paths=False)[1]
     assert wrong > 0
 
 

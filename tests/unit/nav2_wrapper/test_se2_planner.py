@@ -170,7 +170,7 @@ def test_the_controllers_hold_the_planned_heading_and_keep_it_across_a_restart()
     ctl.set_path(plan.path, plan.headings)
     in_wall = int(np.flatnonzero(plan.path[:, 1] > 3.5)[0])
     x, y = plan.path[in_wall]
-    ctl._idx = -1
+    ctl.progress_index = -1
     i = ctl._closest(x, y)
     target = ctl._heading_target(i, (x, y, 0.2), (*GOAL, 0.0), cm)
     assert abs(math.sin(target)) > math.cos(math.radians(10))      # along the slot, whatever the yaw now
