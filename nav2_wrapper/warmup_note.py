@@ -21,7 +21,7 @@ log = logging.getLogger("nav2_wrapper")
 #: Every warm-up note starts with this; clients recognise a PENDING goal that waits for it by the prefix.
 WARMING = "warming up the planner"
 #: What a cold compile took on the 2-core reference machine (bench/kernel_compile.py); only for the note.
-COLD_COMPILE_ESTIMATE_S = 100
+COLD_COMPILE_ESTIMATE_S = 20
 REPORT_PERIOD_S = 2.0
 
 _t0: list[float] = []
@@ -34,7 +34,7 @@ def warming() -> bool:
 
 
 def note() -> str:
-    """``warming up the planner (compiling navigation kernels, first run on this machine: ~100 s): 12 s so far``."""
+    """``warming up the planner (compiling navigation kernels, first run on this machine: ~20 s): 12 s so far``."""
     elapsed = time.monotonic() - _t0[0] if _t0 else 0.0
     return (f"{WARMING} (compiling navigation kernels, first run on this machine: ~{COLD_COMPILE_ESTIMATE_S} s): "
             f"{elapsed:.0f} s so far")
