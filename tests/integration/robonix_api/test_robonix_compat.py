@@ -188,8 +188,9 @@ def test_ros_message_names_resolve_to_dds_classes() -> None:
     assert resolve_msg_type("LaserScan") is LaserScan is resolve_msg_type("sensor_msgs/msg/LaserScan")
     assert resolve_msg_type("nav_msgs/Odometry") is Odometry
     assert resolve_msg_type(Odometry) is Odometry
-    with pytest.raises(ImportError, match="PointCloud2"):
-        resolve_msg_type("PointCloud2")
+    assert resolve_msg_type("sensor_msgs/msg/PointCloud2").__name__ == "PointCloud2"  # 3D lidars (issue 38)
+    with pytest.raises(ImportError, match="JointState"):
+        resolve_msg_type("JointState")
     with pytest.raises(ValueError, match="unrecognized"):
         resolve_msg_type("a/b/c/d")
     assert qos_and_depth(5) == ("reliable", 5)
