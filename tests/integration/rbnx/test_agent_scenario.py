@@ -393,6 +393,13 @@ def test_a_person_at_a_terminal(deployment: Deployment) -> None:
     tools = rbnx(deployment, "tools")
     assert tools.returncode == 0, tools.stdout + tools.stderr
     assert deployment.url in tools.stdout, tools.stdout + tools.stderr
+    # mapping is `autostart: false`: run alone (the slow suite), nobody has activated it yet
+    if not re.search(r"^mapping\s+service\s+active", rbnx(deployment, "lifecycle", "-f", deploy).stdout, re.M):
+        r = rbnx(deployment, "lifecycle", "-f", deploy, "mapping", "activate")
+        assert (r.returncode, r.stdout.strip()) == (0, "mapping: active"), r.stdout + r.stderr
+    # nav2 comes up once mapping serves /map (it answers Deferred until then)
+    wait_until(lambda: re.search(r"^nav2\s+service\s+active", rbnx(deployment, "lifecycle", "-f", deploy).stdout,
+                                 re.M), 300, "nav2 ACTIVE", 2.0)
     listed = rbnx(deployment, "lifecycle", "-f", deploy)
     assert listed.returncode == 0, listed.stderr
     assert re.search(r"^mapping\s+service\s+active", listed.stdout, re.M), listed.stdout
