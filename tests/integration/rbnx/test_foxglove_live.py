@@ -113,8 +113,20 @@ def test_late_client_gets_channels_schemas_and_latched_map() -> None:
                 c.pump(1.0)
                 # live topics flow too, with receive times as timestamps
                 c.subscribe(3, "/tf")
-                tf.publish(TFMessage(transforms=[make_transform("odom", "base_link", 1.0, 2.0, 0.0, 6.0)]))
-                c.wait_for(lambda: 3 in c.data, 10, "/tf sample")
+                sample = TFMessage(transforms=[make_transform("odom", "base_link", 1.0, 2.0, 0.0, 6.0)])
+                sent = [0.0]
+
+                def tf_arrived() -> bool:
+                    # /tf is volatile, as a live TF stream is: a sample published before the bridge has acted
+                    # on the subscribe is not for this client, so publish at a rate until one arrives
+                    if 3 in c.data:
+                        return True
+                    if time.monotonic() - sent[0] > 0.5:
+                        tf.publish(sample)
+                        sent[0] = time.monotonic()
+                    return False
+
+                c.wait_for(tf_arrived, 30, "/tf sample")
                 got = store.deserialize_cdr(c.data[3][0][1], "tf2_msgs/msg/TFMessage")
                 assert got.transforms[0].transform.translation.y == 2.0
                 assert abs(c.data[3][0][0] - time.time_ns()) < 60e9
