@@ -17,13 +17,11 @@ from robonix_api.proto_gen import navigation_pb2 as nav_pb
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 from robonix_api.proto_gen import sim_pb2
 
-from .conftest import ACTIVATE, DEACTIVATE, HAL, INIT, MAP_PROVIDER, NAV, Proc, wait_until
+from .conftest import ACTIVATE, DEACTIVATE, Proc, start_sim_nav, wait_until
 
 pytestmark = pytest.mark.integration
 NS = "robonix/service/navigation/"
 SIM = "robonix/primitive/sim/"
-HAL_CFG = {"scene": "apartment", "real_time_factor": 4.0, "use_sim_time": True}
-NAV_CFG = {"params_profile": "sim", "use_sim_time": True, "action_wait_s": 90, "clock_timeout_s": 5.0}
 KITCHEN, BEDROOM_2, LIVING = (7.0, 1.5), (7.0, 6.5), (2.5, 4.0)
 
 
@@ -65,16 +63,7 @@ class System:
 
 @pytest.fixture(scope="module")
 def system(procs) -> Iterator[System]:  # type: ignore[no-untyped-def]
-    hal: Proc = procs(HAL, "panda_e2e")
-    mapper: Proc = procs(MAP_PROVIDER, "map_e2e")
-    nav: Proc = procs(NAV, "nav_e2e")
-    assert hal.driver(INIT, HAL_CFG)[0], hal.log()[-3000:]
-    assert hal.driver(ACTIVATE)[0]
-    assert mapper.driver(INIT, {"scene": "apartment"})[0], mapper.log()[-3000:]
-    ok, state, err = nav.driver(INIT, NAV_CFG)
-    assert ok, (err, nav.log()[-4000:])
-    assert state == "inactive", (err, nav.log()[-4000:])
-    assert nav.driver(ACTIVATE)[:2] == (True, "active")
+    hal, nav = start_sim_nav(procs, "e2e")
     yield System(hal, nav)
     log = nav.log()
     assert "Traceback" not in log, log[-4000:]

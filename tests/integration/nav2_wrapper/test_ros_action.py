@@ -18,26 +18,16 @@ from robonix_api.dds import nav2_action as na
 from robonix_api.proto_gen import navigation_pb2 as nav_pb
 from robonix_api.proto_gen import robonix_contracts_pb2_grpc as rpc
 
-from .conftest import ACTIVATE, HAL, INIT, MAP_PROVIDER, NAV, Proc, wait_until
+from .conftest import Proc, start_sim_nav, wait_until
 
 pytestmark = pytest.mark.integration
 NS = "robonix/service/navigation/"
-HAL_CFG = {"scene": "apartment", "real_time_factor": 4.0, "use_sim_time": True}
-NAV_CFG = {"params_profile": "sim", "use_sim_time": True, "action_wait_s": 90, "clock_timeout_s": 5.0}
 KITCHEN, LIVING = (7.0, 1.5), (2.5, 4.0)
 
 
 @pytest.fixture(scope="module")
 def nav(procs) -> Iterator[Proc]:  # type: ignore[no-untyped-def]
-    hal: Proc = procs(HAL, "panda_action")
-    mapper: Proc = procs(MAP_PROVIDER, "map_action")
-    nav: Proc = procs(NAV, "nav_action")
-    assert hal.driver(INIT, HAL_CFG)[0], hal.log()[-3000:]
-    assert hal.driver(ACTIVATE)[0]
-    assert mapper.driver(INIT, {"scene": "apartment"})[0], mapper.log()[-3000:]
-    ok, _state, err = nav.driver(INIT, NAV_CFG)
-    assert ok, (err, nav.log()[-4000:])
-    assert nav.driver(ACTIVATE)[:2] == (True, "active")
+    _hal, nav = start_sim_nav(procs, "action")
     yield nav
     assert "Traceback" not in nav.log(), nav.log()[-4000:]
 
